@@ -1,0 +1,11 @@
+//! The paper's self-contained 2D ("flatland") model of light transport in media.
+
+pub mod bvh;
+pub mod field;
+pub mod geometry;
+pub mod lights;
+pub mod medium;
+pub mod scene;
+pub mod scene_desc;
+pub mod transport;
+pub mod validate;

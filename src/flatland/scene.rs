@@ -1,0 +1,204 @@
+//! A loaded, validated flatland scene ready for ray casting.
+//!
+//! Load with [`Scene::load`] (a file) or [`Scene::from_json`] (text); both reject
+//! malformed JSON, unknown fields and invalid values with an error naming the file,
+//! the JSON path of the field and the problem. The default scene is embedded.
+
+use super::geometry::{Segment, SegmentSet};
+use super::medium::{Medium, Region};
+use super::scene_desc::{LightDesc, RegionDesc, SceneDesc};
+use super::validate::{Problem, validate};
+use crate::core::color::{Rgb, luminance};
+use glam::DVec2;
+use std::path::Path;
+
+/// The embedded default scene (`flatland_scenes/occluder.json`).
+pub const DEFAULT_SCENE_NAME: &str = "occluder.json";
+pub const DEFAULT_SCENE_JSON: &str = include_str!("../../flatland_scenes/occluder.json");
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{file}: cannot read the scene: {message}")]
+    Io { file: String, message: String },
+    #[error("{file}: {}", format_problems(.problems))]
+    Invalid { file: String, problems: Vec<Problem> },
+}
+
+fn format_problems(p: &[Problem]) -> String {
+    p.iter().map(|p| format!("{}: {}", p.path, p.message)).collect::<Vec<_>>().join("; ")
+}
+
+impl SceneError {
+    pub fn problems(&self) -> &[Problem] {
+        match self {
+            SceneError::Invalid { problems, .. } => problems,
+            SceneError::Io { .. } => &[],
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointLight {
+    pub position: DVec2,
+    /// W rad⁻¹.
+    pub intensity: Rgb,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct CollimatedLight {
+    /// Unit direction of travel.
+    pub direction: DVec2,
+    pub aperture: [DVec2; 2],
+    /// W m⁻¹ across the beam.
+    pub irradiance: Rgb,
+}
+
+/// A scene ready for the transport code.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// What was loaded (serialises back to the same JSON).
+    pub desc: SceneDesc,
+    /// Where it came from (a file name, or "<embedded …>").
+    pub source: String,
+    pub domain_min: DVec2,
+    pub domain_max: DVec2,
+    pub geometry: SegmentSet,
+    pub point_lights: Vec<PointLight>,
+    pub collimated_lights: Vec<CollimatedLight>,
+    /// Indices of emitting segments and the CDF used to pick one for NEE.
+    pub emitters: Vec<u32>,
+    pub emitter_cdf: Vec<f64>,
+    pub medium: Option<Medium>,
+}
+
+impl Scene {
+    /// Read, parse and validate a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io { file: file.clone(), message: e.to_string() })?;
+        Self::from_json(&text, &file)
+    }
+
+    /// The embedded default scene.
+    pub fn default_scene() -> Scene {
+        Self::from_json(DEFAULT_SCENE_JSON, &format!("<embedded {DEFAULT_SCENE_NAME}>"))
+            .expect("the embedded default scene is valid (tested)")
+    }
+
+    /// Parse and validate scene JSON; `file` names the source in errors.
+    pub fn from_json(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let path = if path == "." { "(document)".to_string() } else { path };
+            SceneError::Invalid { file: file.to_string(), problems: vec![Problem { path, message: e.inner().to_string() }] }
+        })?;
+        Self::from_desc(desc, file)
+    }
+
+    /// Validate a description and build the scene.
+    pub fn from_desc(desc: SceneDesc, file: &str) -> Result<Scene, SceneError> {
+        let problems = validate(&desc);
+        if !problems.is_empty() {
+            return Err(SceneError::Invalid { file: file.to_string(), problems });
+        }
+        Ok(Self::build(desc, file))
+    }
+
+    fn build(desc: SceneDesc, file: &str) -> Scene {
+        let v = |p: [f64; 2]| DVec2::new(p[0], p[1]);
+        let rgb = |c: &super::scene_desc::Color| Rgb::from_array(c.0);
+        let domain_min = v(desc.domain.min);
+        let domain_max = v(desc.domain.max);
+        let mut segments = Vec::new();
+        for s in &desc.segments {
+            let (refl, emit) = (rgb(&s.reflectance), rgb(&s.emission));
+            let pts: Vec<DVec2> = match (&s.a, &s.b, &s.points) {
+                (Some(a), Some(b), _) => vec![v(*a), v(*b)],
+                (_, _, Some(p)) => p.iter().map(|&q| v(q)).collect(),
+                _ => unreachable!("validated"),
+            };
+            let n = pts.len();
+            let count = if s.closed { n } else { n - 1 };
+            for i in 0..count {
+                segments.push(Segment::new(pts[i], pts[(i + 1) % n], refl, emit, s.two_sided));
+            }
+        }
+        let mut point_lights = Vec::new();
+        let mut collimated_lights = Vec::new();
+        for l in &desc.lights {
+            match l {
+                LightDesc::Point { position, intensity } => {
+                    point_lights.push(PointLight { position: v(*position), intensity: rgb(intensity) })
+                }
+                LightDesc::Collimated { direction, aperture, irradiance } => collimated_lights.push(CollimatedLight {
+                    direction: v(*direction).normalize(),
+                    aperture: [v(aperture[0]), v(aperture[1])],
+                    irradiance: rgb(irradiance),
+                }),
+            }
+        }
+        let medium = desc.medium.as_ref().map(|m| {
+            let region = match &m.region {
+                RegionDesc::Everywhere => Region::Everywhere,
+                RegionDesc::Domain => Region::Polygon(rect_polygon(domain_min, domain_max)),
+                RegionDesc::Rect(r) => Region::Polygon(rect_polygon(v(r.min), v(r.max))),
+                RegionDesc::Polygon(p) => Region::Polygon(p.iter().map(|&q| v(q)).collect()),
+            };
+            Medium::new(rgb(&m.sigma_a), rgb(&m.sigma_s), m.g, region)
+        });
+        // A medium that neither scatters nor absorbs costs nothing: drop it.
+        let medium = medium.filter(|m| m.sigma_t.max_element() > 0.0);
+        // Pick emitters for NEE in proportion to (luminance of emission) × length.
+        let emitters: Vec<u32> =
+            (0..segments.len() as u32).filter(|&i| segments[i as usize].is_emitter()).collect();
+        let weights: Vec<f64> = emitters
+            .iter()
+            .map(|&i| {
+                let s = &segments[i as usize];
+                luminance(s.emission).max(1e-3 * s.emission.max_element()) * s.length()
+            })
+            .collect();
+        let total: f64 = weights.iter().sum();
+        let mut acc = 0.0;
+        let emitter_cdf = weights
+            .iter()
+            .map(|w| {
+                acc += w / total;
+                acc
+            })
+            .collect();
+        let scale = (domain_max - domain_min).length();
+        Scene {
+            desc,
+            source: file.to_string(),
+            domain_min,
+            domain_max,
+            geometry: SegmentSet::new(segments, scale),
+            point_lights,
+            collimated_lights,
+            emitters,
+            emitter_cdf,
+            medium,
+        }
+    }
+
+    /// Diagonal of the domain: the scene's length scale.
+    pub fn scale(&self) -> f64 {
+        (self.domain_max - self.domain_min).length()
+    }
+
+    /// Probability of picking emitter number `k` (index into `emitters`).
+    pub fn emitter_probability(&self, k: usize) -> f64 {
+        self.emitter_cdf[k] - if k == 0 { 0.0 } else { self.emitter_cdf[k - 1] }
+    }
+
+    /// The medium at `p`, if any.
+    pub fn medium_at(&self, p: DVec2) -> Option<&Medium> {
+        self.medium.as_ref().filter(|m| m.contains(p))
+    }
+}
+
+fn rect_polygon(a: DVec2, b: DVec2) -> Vec<DVec2> {
+    vec![a, DVec2::new(b.x, a.y), b, DVec2::new(a.x, b.y)]
+}

@@ -1,0 +1,218 @@
+//! The flatland scene file format (JSON, serde, unknown fields rejected).
+//!
+//! Units: lengths in scene units (metres); radiance in W m⁻¹ rad⁻¹ (2D);
+//! point-light intensity in W rad⁻¹; collimated irradiance in W m⁻¹ measured
+//! across the beam; σ_a, σ_s in m⁻¹. Colours are RGB triples or a scalar (grey).
+//! The README documents the format with an annotated example. These structs
+//! serialise back exactly what was loaded, so the app can save scenes.
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// An RGB value written either as a scalar (grey) or as `[r, g, b]`.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Color(pub [f64; 3]);
+
+impl Color {
+    pub fn grey(v: f64) -> Self {
+        Color([v; 3])
+    }
+    pub fn is_zero(&self) -> bool {
+        self.0 == [0.0; 3]
+    }
+}
+
+impl Serialize for Color {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let [r, g, b] = self.0;
+        if r == g && g == b { s.serialize_f64(r) } else { self.0.serialize(s) }
+    }
+}
+
+impl<'de> Deserialize<'de> for Color {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Color;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an [r, g, b] array of three numbers")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Color, E> {
+                Ok(Color::grey(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Color, E> {
+                Ok(Color::grey(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Color, E> {
+                Ok(Color::grey(v as f64))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<Color, A::Error> {
+                let mut c = [0.0; 3];
+                for (i, slot) in c.iter_mut().enumerate() {
+                    *slot = a
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+                }
+                if a.next_element::<f64>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(4, &self));
+                }
+                Ok(Color(c))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A whole flatland scene file.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    /// One line saying what the scene is for.
+    #[serde(default)]
+    pub description: String,
+    /// The rectangle shown and rendered.
+    pub domain: RectDesc,
+    #[serde(default)]
+    pub segments: Vec<SegmentDesc>,
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
+    /// No medium at all (vacuum) when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub medium: Option<MediumDesc>,
+    #[serde(default)]
+    pub render: RenderDesc,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RectDesc {
+    pub min: [f64; 2],
+    pub max: [f64; 2],
+}
+
+/// A straight segment `a`–`b`, or a polyline through `points` (closed if `closed`),
+/// with a diffuse material. The front side is to the left of a→b.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SegmentDesc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub b: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<[f64; 2]>>,
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub closed: bool,
+    /// Diffuse reflectance ρ in [0, 1] (BRDF ρ/2 in flatland).
+    #[serde(default)]
+    pub reflectance: Color,
+    /// Emitted radiance (W m⁻¹ rad⁻¹), ≥ 0.
+    #[serde(default, skip_serializing_if = "Color::is_zero")]
+    pub emission: Color,
+    /// Reflect and emit on both sides (default), or only on the front (left) side.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub two_sided: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+fn is_true(b: &bool) -> bool {
+    *b
+}
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LightDesc {
+    /// Isotropic point light; `intensity` in W rad⁻¹ (power = 2π · intensity).
+    Point { position: [f64; 2], intensity: Color },
+    /// A collimated beam travelling along `direction`, entering the scene through
+    /// the `aperture` segment (a window); `irradiance` in W m⁻¹ across the beam.
+    Collimated {
+        direction: [f64; 2],
+        aperture: [[f64; 2]; 2],
+        irradiance: Color,
+    },
+}
+
+/// A homogeneous medium with a Henyey–Greenstein phase function.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MediumDesc {
+    pub sigma_a: Color,
+    pub sigma_s: Color,
+    #[serde(default)]
+    pub g: f64,
+    #[serde(default)]
+    pub region: RegionDesc,
+}
+
+/// Where the medium is. Its boundary is index-matched (no refraction).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Default)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum RegionDesc {
+    /// The whole (unbounded) plane.
+    #[default]
+    Everywhere,
+    /// The scene's domain rectangle.
+    Domain,
+    Rect(RectDesc),
+    /// A simple polygon (even-odd rule), at least three vertices.
+    Polygon(Vec<[f64; 2]>),
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    /// In-scattered radiance L_s(x, ω_o) (the cached quantity).
+    #[default]
+    Ls,
+    /// Fluence φ(x) = ∫ L_i dθ.
+    Fluence,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Part {
+    #[default]
+    All,
+    Direct,
+    Single,
+    Multiple,
+}
+
+/// Defaults for rendering the scene's field with no flags.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderDesc {
+    pub resolution: [u32; 2],
+    pub spp: u32,
+    pub seed: u64,
+    pub quantity: Quantity,
+    pub part: Part,
+    /// Exposure in stops for tone-mapped figures.
+    pub exposure: f64,
+    /// Outgoing direction ω_o of L_s, as an angle in degrees (matters only for g ≠ 0).
+    pub omega_o_deg: f64,
+    /// Maximum path length in scattering/reflection events.
+    pub max_depth: u32,
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        RenderDesc {
+            resolution: [256, 256],
+            spp: 64,
+            seed: 0,
+            quantity: Quantity::Ls,
+            part: Part::All,
+            exposure: 0.0,
+            omega_o_deg: 0.0,
+            max_depth: 256,
+        }
+    }
+}

@@ -1,0 +1,17 @@
+//! volcache: a research workbench for light transport in participating media,
+//! reproducing "Second-Order Occlusion-Aware Volumetric Radiance Caching"
+//! (Marco, Jarabo, Jarosz, Gutierrez; ACM TOG 2018).
+//!
+//! Layers (see README, "Architecture"):
+//! - [`core`]: dimension-generic numerics (phase function, transmittance, RNG streams,
+//!   statistics). Knows nothing of scenes, files, threads or UI.
+//! - [`flatland`]: the paper's 2D model: scenes, ray casting, reference estimators,
+//!   radiance fields.
+//! - [`figure`]: drawing of data it is handed (tiny-skia), PNG/EXR/JSON writers.
+//! - [`progress`]: the progress/cancel handle every long-running entry point takes.
+
+pub mod core;
+pub mod figure;
+pub mod flatland;
+pub mod output;
+pub mod progress;
