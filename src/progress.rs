@@ -42,7 +42,11 @@ impl Progress {
     /// Fraction in [0, 1].
     pub fn fraction(&self) -> f64 {
         let t = self.total();
-        if t == 0 { 0.0 } else { (self.done() as f64 / t as f64).min(1.0) }
+        if t == 0 {
+            0.0
+        } else {
+            (self.done() as f64 / t as f64).min(1.0)
+        }
     }
 
     pub fn cancel(&self) {

@@ -20,15 +20,34 @@ fn point_source(c: f64) -> Scene {
 /// φ(r) of a unit-power isotropic point source in an infinite medium (σ_t = 1).
 #[test]
 fn point_source_fluence_matches_published_values() {
-    let table = [(0.5, [(0.5, 0.3040237), (1.0, 0.1168853), (2.0, 0.03051825)]), (0.9, [(0.5, 0.5882582), (1.0, 0.3234545), (2.0, 0.1486884)])];
+    let table = [
+        (0.5, [(0.5, 0.3040237), (1.0, 0.1168853), (2.0, 0.03051825)]),
+        (0.9, [(0.5, 0.5882582), (1.0, 0.3234545), (2.0, 0.1486884)]),
+    ];
     for (c, rows) in table {
         let scene = point_source(c);
         for (k, (r, want)) in rows.into_iter().enumerate() {
-            let e = estimate(&scene, DVec2::new(r, 0.0), &Query::Fluence, &Settings::default(), 400_000, 7, k as u64);
+            let e = estimate(
+                &scene,
+                DVec2::new(r, 0.0),
+                &Query::Fluence,
+                &Settings::default(),
+                400_000,
+                7,
+                k as u64,
+            );
             let got = e.mean.total().x;
-            let se = e.std_error.direct.x.hypot(e.std_error.single.x).hypot(e.std_error.multiple.x);
+            let se = e
+                .std_error
+                .direct
+                .x
+                .hypot(e.std_error.single.x)
+                .hypot(e.std_error.multiple.x);
             println!("c={c} r={r}: {got:.6} ± {se:.6} (published {want})");
-            assert!((got - want).abs() < 4.0 * se + 1e-4 * want, "c={c} r={r}: {got} ± {se} vs {want}");
+            assert!(
+                (got - want).abs() < 4.0 * se + 1e-4 * want,
+                "c={c} r={r}: {got} ± {se} vs {want}"
+            );
             assert!(se < 0.01 * want, "error bar too wide to discriminate: {se}");
         }
     }
@@ -50,10 +69,25 @@ fn half_space(c: f64) -> Scene {
 /// Half-space albedo problem at normal incidence: reflected fraction R(c).
 #[test]
 fn half_space_reflectance_matches_published_values() {
-    for (c, want, spp) in [(0.5, 0.13294292, 200_000), (0.9, 0.4522522, 200_000), (0.99, 0.77835416, 50_000)] {
+    for (c, want, spp) in [
+        (0.5, 0.13294292, 200_000),
+        (0.9, 0.4522522, 200_000),
+        (0.99, 0.77835416, 50_000),
+    ] {
         let scene = half_space(c);
         let q = Query::Irradiance { normal: DVec2::Y };
-        let e = estimate(&scene, DVec2::new(0.0, -0.5), &q, &Settings { max_depth: 100_000, rr_depth: 3 }, spp, 3, 0);
+        let e = estimate(
+            &scene,
+            DVec2::new(0.0, -0.5),
+            &q,
+            &Settings {
+                max_depth: 100_000,
+                rr_depth: 3,
+            },
+            spp,
+            3,
+            0,
+        );
         let got = e.mean.total().x;
         let se = e.std_error.multiple.x.hypot(e.std_error.single.x);
         println!("c={c}: R = {got:.6} ± {se:.6} (published {want})");

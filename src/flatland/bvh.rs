@@ -13,7 +13,10 @@ struct Aabb {
 }
 
 impl Aabb {
-    const EMPTY: Aabb = Aabb { min: DVec2::splat(f64::INFINITY), max: DVec2::splat(f64::NEG_INFINITY) };
+    const EMPTY: Aabb = Aabb {
+        min: DVec2::splat(f64::INFINITY),
+        max: DVec2::splat(f64::NEG_INFINITY),
+    };
 
     fn grow(&mut self, p: DVec2) {
         self.min = self.min.min(p);
@@ -43,7 +46,11 @@ impl Aabb {
         let t_enter = lo.x.max(lo.y).max(0.0);
         let t_exit = hi.x.min(hi.y).min(t_max);
         let nan = lo.is_nan_mask().any() || hi.is_nan_mask().any();
-        if nan || t_enter <= t_exit * (1.0 + 1e-12) { Some(t_enter) } else { None }
+        if nan || t_enter <= t_exit * (1.0 + 1e-12) {
+            Some(t_enter)
+        } else {
+            None
+        }
     }
 }
 
@@ -68,7 +75,10 @@ const BINS: usize = 16;
 
 impl Bvh {
     pub fn build(segments: &[Segment]) -> Bvh {
-        let mut bvh = Bvh { nodes: Vec::new(), order: (0..segments.len() as u32).collect() };
+        let mut bvh = Bvh {
+            nodes: Vec::new(),
+            order: (0..segments.len() as u32).collect(),
+        };
         if segments.is_empty() {
             return bvh;
         }
@@ -90,7 +100,11 @@ impl Bvh {
         let idx = &self.order[start..end];
         let bounds = idx.iter().fold(Aabb::EMPTY, |b, &i| b.union(&boxes[i as usize]));
         let node = self.nodes.len();
-        self.nodes.push(Node { bounds, start_or_right: start as u32, count: (end - start) as u32 });
+        self.nodes.push(Node {
+            bounds,
+            start_or_right: start as u32,
+            count: (end - start) as u32,
+        });
         if end - start <= MAX_LEAF {
             return node;
         }
@@ -129,7 +143,10 @@ impl Bvh {
             }
             for split in 1..BINS {
                 let (l, r) = bins.split_at(split);
-                let fold = |s: &[(Aabb, usize)]| s.iter().fold((Aabb::EMPTY, 0), |(b, n), (bb, nn)| (b.union(bb), n + nn));
+                let fold = |s: &[(Aabb, usize)]| {
+                    s.iter()
+                        .fold((Aabb::EMPTY, 0), |(b, n), (bb, nn)| (b.union(bb), n + nn))
+                };
                 let (lb, ln) = fold(l);
                 let (rb, rn) = fold(r);
                 if ln == 0 || rn == 0 {

@@ -22,7 +22,14 @@ pub struct Field {
 impl Field {
     pub fn new(width: usize, height: usize, world_min: DVec2, world_max: DVec2) -> Self {
         let n = width * height;
-        Field { width, height, world_min, world_max, values: vec![Rgb::ZERO; n], valid: vec![true; n] }
+        Field {
+            width,
+            height,
+            world_min,
+            world_max,
+            values: vec![Rgb::ZERO; n],
+            valid: vec![true; n],
+        }
     }
 
     /// World position of the centre of pixel (i, j).
@@ -82,7 +89,10 @@ impl FieldParams {
             quantity: r.quantity,
             part: r.part,
             omega_o_deg: r.omega_o_deg,
-            settings: Settings { max_depth: r.max_depth, ..Settings::default() },
+            settings: Settings {
+                max_depth: r.max_depth,
+                ..Settings::default()
+            },
         }
     }
 
@@ -134,8 +144,21 @@ pub fn render_field(scene: &Scene, params: &FieldParams, progress: &Progress) ->
                 progress.check()?;
                 let x = field.pixel_center(i, j);
                 let valid = q.defined_at(scene, x);
-                let e = estimate(scene, x, &q, &params.settings, params.spp, params.seed, (j * w + i) as u64);
-                row.push((e.mean.get(params.part), luminance(e.std_error.get(params.part)), valid, e.rays));
+                let e = estimate(
+                    scene,
+                    x,
+                    &q,
+                    &params.settings,
+                    params.spp,
+                    params.seed,
+                    (j * w + i) as u64,
+                );
+                row.push((
+                    e.mean.get(params.part),
+                    luminance(e.std_error.get(params.part)),
+                    valid,
+                    e.rays,
+                ));
             }
             progress.advance(1);
             Ok(row)
@@ -151,5 +174,10 @@ pub fn render_field(scene: &Scene, params: &FieldParams, progress: &Progress) ->
             rays += r;
         }
     }
-    Ok(RenderedField { field, std_error, rays, seconds: start.elapsed().as_secs_f64() })
+    Ok(RenderedField {
+        field,
+        std_error,
+        rays,
+        seconds: start.elapsed().as_secs_f64(),
+    })
 }

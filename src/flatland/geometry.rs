@@ -30,7 +30,14 @@ pub struct Segment {
 impl Segment {
     pub fn new(a: DVec2, b: DVec2, reflectance: Rgb, emission: Rgb, two_sided: bool) -> Self {
         let normal = (b - a).perp().normalize_or_zero();
-        Segment { a, b, normal, reflectance, emission, two_sided }
+        Segment {
+            a,
+            b,
+            normal,
+            reflectance,
+            emission,
+            two_sided,
+        }
     }
 
     pub fn length(&self) -> f64 {
@@ -119,18 +126,28 @@ pub struct SegmentSet {
     pub t_min: f64,
 }
 
-/// Above this many segments the BVH is used (measured: `volcache bench flatland`).
-pub const BVH_THRESHOLD: usize = 24;
+/// Above this many segments the BVH is used: `volcache bench flatland` measures the
+/// crossover on random segment soups (BVH ahead from 8 segments on; equal at 4).
+pub const BVH_THRESHOLD: usize = 6;
 
 impl SegmentSet {
     pub fn new(segments: Vec<Segment>, scene_scale: f64) -> Self {
-        let accel = if segments.len() > BVH_THRESHOLD { Accel::Bvh } else { Accel::Linear };
+        let accel = if segments.len() > BVH_THRESHOLD {
+            Accel::Bvh
+        } else {
+            Accel::Linear
+        };
         Self::with_accel(segments, scene_scale, accel)
     }
 
     pub fn with_accel(segments: Vec<Segment>, scene_scale: f64, accel: Accel) -> Self {
         let bvh = Bvh::build(&segments);
-        SegmentSet { segments, bvh, accel, t_min: 1e-10 * scene_scale.max(1e-300) }
+        SegmentSet {
+            segments,
+            bvh,
+            accel,
+            t_min: 1e-10 * scene_scale.max(1e-300),
+        }
     }
 
     pub fn accel(&self) -> Accel {
@@ -244,7 +261,11 @@ mod tests {
         for _ in 0..5000 {
             let o = DVec2::new(s.next_f64() * 24.0 - 12.0, s.next_f64() * 24.0 - 12.0);
             let d = DVec2::from_angle(s.next_f64() * 6.3);
-            let t_max = if s.next_f64() < 0.5 { f64::INFINITY } else { s.next_f64() * 10.0 };
+            let t_max = if s.next_f64() < 0.5 {
+                f64::INFINITY
+            } else {
+                s.next_f64() * 10.0
+            };
             assert_eq!(lin.closest_hit(o, d, t_max, None), bvh.closest_hit(o, d, t_max, None));
             assert_eq!(lin.occluded(o, d, t_max, Some(7)), bvh.occluded(o, d, t_max, Some(7)));
         }

@@ -115,7 +115,8 @@ pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, ra
             continue;
         }
         // The beam reaches p only through its aperture.
-        let Some((t_ap, _)) = super::geometry::intersect_segment(p, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY)
+        let Some((t_ap, _)) =
+            super::geometry::intersect_segment(p, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY)
         else {
             continue;
         };
@@ -143,7 +144,11 @@ pub fn emitter_pdf(scene: &Scene, p: DVec2, seg: u32) -> f64 {
         return 0.0;
     };
     let (theta, _, _) = subtended(scene, p, seg);
-    if theta > 0.0 { scene.emitter_probability(k) / theta } else { 0.0 }
+    if theta > 0.0 {
+        scene.emitter_probability(k) / theta
+    } else {
+        0.0
+    }
 }
 
 /// One-sample NEE to emitting segments at `p`, weighted by `lobe`. With `mis`, the
@@ -162,7 +167,10 @@ pub fn emitter_nee(
         return Rgb::ZERO;
     }
     let u = s.next_f64();
-    let k = scene.emitter_cdf.partition_point(|&c| c <= u).min(scene.emitters.len() - 1);
+    let k = scene
+        .emitter_cdf
+        .partition_point(|&c| c <= u)
+        .min(scene.emitters.len() - 1);
     let i = scene.emitters[k];
     let v = s.next_f64();
     if Some(i) == skip {

@@ -51,7 +51,14 @@ impl Medium {
     pub fn new(sigma_a: Rgb, sigma_s: Rgb, g: f64, region: Region) -> Self {
         let sigma_t = sigma_a + sigma_s;
         let grey = sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z;
-        Medium { sigma_a, sigma_s, sigma_t, phase: Hg2::new(g), region, grey }
+        Medium {
+            sigma_a,
+            sigma_s,
+            sigma_t,
+            phase: Hg2::new(g),
+            region,
+            grey,
+        }
     }
 
     /// Is `p` inside the medium's region?
@@ -146,13 +153,17 @@ impl Medium {
             Flight::Pass { weight: Rgb::ONE }
         } else {
             let tr = transmittance(self.sigma_t, walked);
-            Flight::Pass { weight: tr / (tr.element_sum() / 3.0) }
+            Flight::Pass {
+                weight: tr / (tr.element_sum() / 3.0),
+            }
         }
     }
 
     fn pass(&self, o: DVec2, d: DVec2, t_max: f64) -> Flight {
         let tr = transmittance(self.sigma_t, self.length_inside(o, d, t_max));
-        Flight::Pass { weight: tr / (tr.element_sum() / 3.0).max(f64::MIN_POSITIVE) }
+        Flight::Pass {
+            weight: tr / (tr.element_sum() / 3.0).max(f64::MIN_POSITIVE),
+        }
     }
 }
 
@@ -222,7 +233,10 @@ mod tests {
         let est = pass_w / n as f64;
         let exact = transmittance(sig_t, 0.7);
         for c in 0..3 {
-            assert!((est[c] - exact[c]).abs() < 0.01 * exact[c] + 2e-3, "channel {c}: {est} vs {exact}");
+            assert!(
+                (est[c] - exact[c]).abs() < 0.01 * exact[c] + 2e-3,
+                "channel {c}: {est} vs {exact}"
+            );
         }
     }
 }

@@ -25,7 +25,10 @@ pub enum SceneError {
 }
 
 fn format_problems(p: &[Problem]) -> String {
-    p.iter().map(|p| format!("{}: {}", p.path, p.message)).collect::<Vec<_>>().join("; ")
+    p.iter()
+        .map(|p| format!("{}: {}", p.path, p.message))
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 impl SceneError {
@@ -75,7 +78,10 @@ impl Scene {
     /// Read, parse and validate a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io { file: file.clone(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+            file: file.clone(),
+            message: e.to_string(),
+        })?;
         Self::from_json(&text, &file)
     }
 
@@ -91,7 +97,13 @@ impl Scene {
         let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let path = if path == "." { "(document)".to_string() } else { path };
-            SceneError::Invalid { file: file.to_string(), problems: vec![Problem { path, message: e.inner().to_string() }] }
+            SceneError::Invalid {
+                file: file.to_string(),
+                problems: vec![Problem {
+                    path,
+                    message: e.inner().to_string(),
+                }],
+            }
         })?;
         Self::from_desc(desc, file)
     }
@@ -100,7 +112,10 @@ impl Scene {
     pub fn from_desc(desc: SceneDesc, file: &str) -> Result<Scene, SceneError> {
         let problems = validate(&desc);
         if !problems.is_empty() {
-            return Err(SceneError::Invalid { file: file.to_string(), problems });
+            return Err(SceneError::Invalid {
+                file: file.to_string(),
+                problems,
+            });
         }
         Ok(Self::build(desc, file))
     }
@@ -128,10 +143,15 @@ impl Scene {
         let mut collimated_lights = Vec::new();
         for l in &desc.lights {
             match l {
-                LightDesc::Point { position, intensity } => {
-                    point_lights.push(PointLight { position: v(*position), intensity: rgb(intensity) })
-                }
-                LightDesc::Collimated { direction, aperture, irradiance } => collimated_lights.push(CollimatedLight {
+                LightDesc::Point { position, intensity } => point_lights.push(PointLight {
+                    position: v(*position),
+                    intensity: rgb(intensity),
+                }),
+                LightDesc::Collimated {
+                    direction,
+                    aperture,
+                    irradiance,
+                } => collimated_lights.push(CollimatedLight {
                     direction: v(*direction).normalize(),
                     aperture: [v(aperture[0]), v(aperture[1])],
                     irradiance: rgb(irradiance),
@@ -150,8 +170,9 @@ impl Scene {
         // A medium that neither scatters nor absorbs costs nothing: drop it.
         let medium = medium.filter(|m| m.sigma_t.max_element() > 0.0);
         // Pick emitters for NEE in proportion to (luminance of emission) × length.
-        let emitters: Vec<u32> =
-            (0..segments.len() as u32).filter(|&i| segments[i as usize].is_emitter()).collect();
+        let emitters: Vec<u32> = (0..segments.len() as u32)
+            .filter(|&i| segments[i as usize].is_emitter())
+            .collect();
         let weights: Vec<f64> = emitters
             .iter()
             .map(|&i| {

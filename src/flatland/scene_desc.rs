@@ -24,7 +24,11 @@ impl Color {
 impl Serialize for Color {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let [r, g, b] = self.0;
-        if r == g && g == b { s.serialize_f64(r) } else { self.0.serialize(s) }
+        if r == g && g == b {
+            s.serialize_f64(r)
+        } else {
+            self.0.serialize(s)
+        }
     }
 }
 
@@ -125,8 +129,11 @@ fn is_false(b: &bool) -> bool {
     !*b
 }
 
+/// A light. In JSON: an object with `"type": "point"` or `"type": "collimated"`
+/// and that type's fields (parsed through [`RawLight`] so that errors keep the
+/// JSON path of the offending field).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(try_from = "RawLight", into = "RawLight")]
 pub enum LightDesc {
     /// Isotropic point light; `intensity` in W rad⁻¹ (power = 2π · intensity).
     Point { position: [f64; 2], intensity: Color },
@@ -137,6 +144,86 @@ pub enum LightDesc {
         aperture: [[f64; 2]; 2],
         irradiance: Color,
     },
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum LightKind {
+    Point,
+    Collimated,
+}
+
+/// The JSON shape of a light: every field optional, checked per type.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawLight {
+    #[serde(rename = "type")]
+    pub kind: Option<LightKind>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<Color>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aperture: Option<[[f64; 2]; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub irradiance: Option<Color>,
+}
+
+impl TryFrom<RawLight> for LightDesc {
+    type Error = String;
+    fn try_from(r: RawLight) -> Result<Self, String> {
+        let need = |name: &str, present: bool, kind: &str| {
+            if present { Ok(()) } else { Err(format!("missing field `{name}` (required for a {kind} light)")) }
+        };
+        let forbid = |name: &str, present: bool, kind: &str| {
+            if present { Err(format!("field `{name}` does not apply to a {kind} light")) } else { Ok(()) }
+        };
+        match r.kind {
+            None => Err("missing field `type` (\"point\" or \"collimated\")".into()),
+            Some(LightKind::Point) => {
+                need("position", r.position.is_some(), "point")?;
+                need("intensity", r.intensity.is_some(), "point")?;
+                forbid("direction", r.direction.is_some(), "point")?;
+                forbid("aperture", r.aperture.is_some(), "point")?;
+                forbid("irradiance", r.irradiance.is_some(), "point")?;
+                Ok(LightDesc::Point { position: r.position.unwrap(), intensity: r.intensity.unwrap() })
+            }
+            Some(LightKind::Collimated) => {
+                need("direction", r.direction.is_some(), "collimated")?;
+                need("aperture", r.aperture.is_some(), "collimated")?;
+                need("irradiance", r.irradiance.is_some(), "collimated")?;
+                forbid("position", r.position.is_some(), "collimated")?;
+                forbid("intensity", r.intensity.is_some(), "collimated")?;
+                Ok(LightDesc::Collimated {
+                    direction: r.direction.unwrap(),
+                    aperture: r.aperture.unwrap(),
+                    irradiance: r.irradiance.unwrap(),
+                })
+            }
+        }
+    }
+}
+
+impl From<LightDesc> for RawLight {
+    fn from(l: LightDesc) -> Self {
+        match l {
+            LightDesc::Point { position, intensity } => RawLight {
+                kind: Some(LightKind::Point),
+                position: Some(position),
+                intensity: Some(intensity),
+                ..Default::default()
+            },
+            LightDesc::Collimated { direction, aperture, irradiance } => RawLight {
+                kind: Some(LightKind::Collimated),
+                direction: Some(direction),
+                aperture: Some(aperture),
+                irradiance: Some(irradiance),
+                ..Default::default()
+            },
+        }
+    }
 }
 
 /// A homogeneous medium with a Henyey–Greenstein phase function.

@@ -34,7 +34,10 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { max_depth: 1024, rr_depth: 3 }
+        Settings {
+            max_depth: 1024,
+            rr_depth: 3,
+        }
     }
 }
 
@@ -61,7 +64,11 @@ impl Parts {
     }
 
     fn scaled(self, k: Rgb) -> Parts {
-        Parts { direct: self.direct * k, single: self.single * k, multiple: self.multiple * k }
+        Parts {
+            direct: self.direct * k,
+            single: self.single * k,
+            multiple: self.multiple * k,
+        }
     }
 }
 
@@ -106,7 +113,10 @@ pub fn radiance_path(
                 p += dir * t;
                 skip = None;
                 let m = scene.medium.as_ref().expect("scattering needs a medium");
-                Lobe::Phase { hg: m.phase, travel: dir }
+                Lobe::Phase {
+                    hg: m.phase,
+                    travel: dir,
+                }
             }
             Flight::Pass { weight } => {
                 beta *= weight;
@@ -129,7 +139,10 @@ pub fn radiance_path(
                 }
                 p = seg.point_at(h.u);
                 skip = Some(h.segment);
-                Lobe::Lambert { normal, reflectance: seg.reflectance }
+                Lobe::Lambert {
+                    normal,
+                    reflectance: seg.reflectance,
+                }
             }
         };
         l += beta * (direct_lights(scene, p, &lobe, skip, rays) + emitter_nee(scene, p, &lobe, skip, !last, s, rays));
@@ -185,10 +198,14 @@ fn sample_at(
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Query {
     /// L_s(x, ω_o), zero outside the medium.
-    InScattered { omega_o: DVec2 },
+    InScattered {
+        omega_o: DVec2,
+    },
     Fluence,
     /// ∫ L_i(x, ω) max(0, n·ω) dω on a virtual sensor with unit normal n.
-    Irradiance { normal: DVec2 },
+    Irradiance {
+        normal: DVec2,
+    },
 }
 
 impl Query {
@@ -213,7 +230,10 @@ pub fn sample_query(scene: &Scene, x: DVec2, q: &Query, settings: &Settings, s: 
     match *q {
         Query::InScattered { omega_o } => match scene.medium_at(x) {
             Some(m) => {
-                let lobe = Lobe::Phase { hg: m.phase, travel: -omega_o };
+                let lobe = Lobe::Phase {
+                    hg: m.phase,
+                    travel: -omega_o,
+                };
                 sample_at(scene, x, &lobe, m.sigma_s, settings, s, rays)
             }
             None => Parts::default(),
@@ -221,7 +241,10 @@ pub fn sample_query(scene: &Scene, x: DVec2, q: &Query, settings: &Settings, s: 
         Query::Fluence => sample_at(scene, x, &Lobe::Uniform, Rgb::ONE, settings, s, rays),
         Query::Irradiance { normal } => {
             // Lambert with ρ = 2 has value max(0, n·ω): the cosine-weighted integral.
-            let lobe = Lobe::Lambert { normal, reflectance: Rgb::splat(2.0) };
+            let lobe = Lobe::Lambert {
+                normal,
+                reflectance: Rgb::splat(2.0),
+            };
             sample_at(scene, x, &lobe, Rgb::ONE, settings, s, rays)
         }
     }
@@ -268,8 +291,16 @@ impl Accumulator {
             })
             .collect();
         Estimate {
-            mean: Parts { direct: mean[0], single: mean[1], multiple: mean[2] },
-            std_error: Parts { direct: se[0], single: se[1], multiple: se[2] },
+            mean: Parts {
+                direct: mean[0],
+                single: mean[1],
+                multiple: mean[2],
+            },
+            std_error: Parts {
+                direct: se[0],
+                single: se[1],
+                multiple: se[2],
+            },
             samples: self.n,
             rays: self.rays,
         }
@@ -301,7 +332,10 @@ pub fn estimate_radiance(scene: &Scene, x: DVec2, w: DVec2, settings: &Settings,
     for k in 0..spp {
         let mut s = Sampler::new2(seed, 0, k as u64);
         let (l, _) = radiance_path(scene, x, w.normalize(), None, None, settings, &mut s, &mut rays);
-        acc.push(&Parts { direct: l, ..Default::default() });
+        acc.push(&Parts {
+            direct: l,
+            ..Default::default()
+        });
     }
     let e = acc.estimate();
     (e.mean.direct, e.std_error.direct)

@@ -15,7 +15,10 @@ struct Checker {
 
 impl Checker {
     fn fail(&mut self, path: impl Into<String>, message: impl Into<String>) {
-        self.problems.push(Problem { path: path.into(), message: message.into() });
+        self.problems.push(Problem {
+            path: path.into(),
+            message: message.into(),
+        });
     }
 
     fn finite(&mut self, path: &str, v: f64) -> bool {
@@ -80,7 +83,11 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
                 }
                 c.color(&format!("{path}.intensity"), intensity, None);
             }
-            LightDesc::Collimated { direction, aperture, irradiance } => {
+            LightDesc::Collimated {
+                direction,
+                aperture,
+                irradiance,
+            } => {
                 if c.point(&format!("{path}.direction"), *direction) && direction[0] == 0.0 && direction[1] == 0.0 {
                     c.fail(format!("{path}.direction"), "must not be the zero vector");
                 }
@@ -91,7 +98,12 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
                 }
                 if ok && domain_ok {
                     for k in 0..2 {
-                        c.inside(&format!("{path}.aperture[{k}]"), aperture[k], &d.domain, "the aperture end");
+                        c.inside(
+                            &format!("{path}.aperture[{k}]"),
+                            aperture[k],
+                            &d.domain,
+                            "the aperture end",
+                        );
                     }
                 }
                 c.color(&format!("{path}.irradiance"), irradiance, None);
@@ -110,9 +122,15 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
                 c.rect("medium.region.rect", r);
             }
             RegionDesc::Polygon(pts) => {
-                let all = pts.iter().enumerate().all(|(k, p)| c.point(&format!("medium.region.polygon[{k}]"), *p));
+                let all = pts
+                    .iter()
+                    .enumerate()
+                    .all(|(k, p)| c.point(&format!("medium.region.polygon[{k}]"), *p));
                 if pts.len() < 3 {
-                    c.fail("medium.region.polygon", format!("needs at least 3 vertices, got {}", pts.len()));
+                    c.fail(
+                        "medium.region.polygon",
+                        format!("needs at least 3 vertices, got {}", pts.len()),
+                    );
                 } else if all && polygon_area(pts).abs() == 0.0 {
                     c.fail("medium.region.polygon", "has zero area");
                 }
@@ -121,7 +139,10 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
     }
     let r = &d.render;
     if r.resolution[0] == 0 || r.resolution[1] == 0 || r.resolution[0] > 16384 || r.resolution[1] > 16384 {
-        c.fail("render.resolution", format!("must be between 1 and 16384 pixels per side, got {:?}", r.resolution));
+        c.fail(
+            "render.resolution",
+            format!("must be between 1 and 16384 pixels per side, got {:?}", r.resolution),
+        );
     }
     if r.spp == 0 {
         c.fail("render.spp", "must be at least 1");
@@ -143,7 +164,10 @@ fn validate_segment(c: &mut Checker, path: &str, s: &SegmentDesc) {
         }
         (None, None, Some(pts)) => {
             if pts.len() < 2 {
-                c.fail(format!("{path}.points"), format!("needs at least 2 points, got {}", pts.len()));
+                c.fail(
+                    format!("{path}.points"),
+                    format!("needs at least 2 points, got {}", pts.len()),
+                );
             }
             for (k, p) in pts.iter().enumerate() {
                 let pp = format!("{path}.points[{k}]");
@@ -152,13 +176,19 @@ fn validate_segment(c: &mut Checker, path: &str, s: &SegmentDesc) {
                 }
             }
             if s.closed && pts.len() >= 2 && pts.first() == pts.last() {
-                c.fail(format!("{path}.points"), "closed polyline repeats its first point at the end");
+                c.fail(
+                    format!("{path}.points"),
+                    "closed polyline repeats its first point at the end",
+                );
             }
         }
         _ => c.fail(path.to_string(), "give either both `a` and `b`, or `points`"),
     }
     if s.closed && s.points.is_none() {
-        c.fail(format!("{path}.closed"), "only a polyline given by `points` can be closed");
+        c.fail(
+            format!("{path}.closed"),
+            "only a polyline given by `points` can be closed",
+        );
     }
     c.color(&format!("{path}.reflectance"), &s.reflectance, Some(1.0));
     c.color(&format!("{path}.emission"), &s.emission, None);
@@ -167,5 +197,8 @@ fn validate_segment(c: &mut Checker, path: &str, s: &SegmentDesc) {
 /// Signed area (positive for counter-clockwise).
 pub fn polygon_area(pts: &[[f64; 2]]) -> f64 {
     let n = pts.len();
-    (0..n).map(|i| pts[i][0] * pts[(i + 1) % n][1] - pts[(i + 1) % n][0] * pts[i][1]).sum::<f64>() / 2.0
+    (0..n)
+        .map(|i| pts[i][0] * pts[(i + 1) % n][1] - pts[(i + 1) % n][0] * pts[i][1])
+        .sum::<f64>()
+        / 2.0
 }

@@ -1,0 +1,45 @@
+//! Command-line definitions (clap) and dispatch.
+
+mod bench;
+mod common;
+mod field;
+mod probe;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "volcache",
+    version,
+    about = "Second-order occlusion-aware volumetric radiance caching: a research workbench"
+)]
+pub struct Cli {
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene's radiance field (L_s or fluence) to PNG, and optionally EXR and JSON.
+    Field(field::FieldArgs),
+    /// Estimate L_s (or fluence) and its parts at points, printed as a table or JSON.
+    Probe(probe::ProbeArgs),
+    /// Benchmarks that print figures and write JSON.
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    if let Some(n) = cli.threads {
+        rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global()?;
+    }
+    match cli.command {
+        Command::Field(a) => field::run(a),
+        Command::Probe(a) => probe::run(a),
+        Command::Bench(b) => bench::run(b),
+    }
+}

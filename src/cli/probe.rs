@@ -1,0 +1,145 @@
+//! `volcache probe`: L_s (or fluence) and its parts at points.
+
+use super::common::{load_scene, parse_point};
+use super::field::QuantityArg;
+use clap::{Args, ValueEnum};
+use glam::DVec2;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use volcache::core::color::{Rgb, luminance};
+use volcache::flatland::scene_desc::Quantity;
+use volcache::flatland::transport::{Parts, Query, Settings, estimate};
+
+#[derive(Clone, Copy, Debug, ValueEnum, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Reference path tracing.
+    Pt,
+}
+
+#[derive(Args, Debug)]
+pub struct ProbeArgs {
+    /// Scene JSON (default: the embedded occluder scene).
+    pub scene: Option<PathBuf>,
+    /// Point X,Y (repeat for several points).
+    #[arg(long = "at", value_parser = parse_point, required = true, allow_hyphen_values = true)]
+    pub at: Vec<DVec2>,
+    #[arg(long, value_enum, default_value = "pt")]
+    pub method: Method,
+    /// Samples per point (default: 64 × the scene's spp).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    #[arg(long)]
+    pub seed: Option<u64>,
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Outgoing direction ω_o of L_s in degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub omega_o: Option<f64>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Serialize)]
+struct PartsOut {
+    direct: [f64; 3],
+    single: [f64; 3],
+    multiple: [f64; 3],
+    total: [f64; 3],
+}
+
+impl From<&Parts> for PartsOut {
+    fn from(p: &Parts) -> Self {
+        PartsOut {
+            direct: p.direct.to_array(),
+            single: p.single.to_array(),
+            multiple: p.multiple.to_array(),
+            total: p.total().to_array(),
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct ProbeOut {
+    at: [f64; 2],
+    method: Method,
+    quantity: Quantity,
+    omega_o_deg: f64,
+    /// False where the quantity is not defined (L_s outside the medium: zero).
+    inside_medium: bool,
+    value: PartsOut,
+    std_error: PartsOut,
+    luminance: f64,
+    spp: u32,
+    seed: u64,
+    rays: u64,
+    seconds: f64,
+}
+
+pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
+    let scene = load_scene(a.scene.as_deref())?;
+    let r = &scene.desc.render;
+    let spp = a.spp.unwrap_or(r.spp.saturating_mul(64));
+    anyhow::ensure!(spp > 0, "--spp must be at least 1");
+    let seed = a.seed.unwrap_or(r.seed);
+    let quantity = a.quantity.map_or(r.quantity, Into::into);
+    let omega_deg = a.omega_o.unwrap_or(r.omega_o_deg);
+    anyhow::ensure!(omega_deg.is_finite(), "--omega-o must be finite");
+    let q = Query::from_quantity(quantity, DVec2::from_angle(omega_deg.to_radians()));
+    let settings = Settings {
+        max_depth: r.max_depth,
+        ..Settings::default()
+    };
+    let out: Vec<ProbeOut> =
+        a.at.par_iter()
+            .enumerate()
+            .map(|(k, &x)| {
+                let t = std::time::Instant::now();
+                let e = estimate(&scene, x, &q, &settings, spp, seed, k as u64);
+                let std_error = Parts {
+                    direct: e.std_error.direct,
+                    single: e.std_error.single,
+                    multiple: e.std_error.multiple,
+                };
+                ProbeOut {
+                    at: x.to_array(),
+                    method: a.method,
+                    quantity,
+                    omega_o_deg: omega_deg,
+                    inside_medium: scene.medium_at(x).is_some(),
+                    value: (&e.mean).into(),
+                    std_error: (&std_error).into(),
+                    luminance: luminance(e.mean.total()),
+                    spp,
+                    seed,
+                    rays: e.rays,
+                    seconds: t.elapsed().as_secs_f64(),
+                }
+            })
+            .collect();
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        let fmt = |c: [f64; 3]| format!("{:.5e}", luminance(Rgb::from_array(c)));
+        println!(
+            "{:>22} {:>12} {:>12} {:>12} {:>12} {:>10}",
+            "point", "direct", "single", "multiple", "total", "rays"
+        );
+        for o in &out {
+            println!(
+                "{:>22} {:>12} {:>12} {:>12} {:>12} {:>10}",
+                format!("({}, {})", o.at[0], o.at[1]),
+                fmt(o.value.direct),
+                fmt(o.value.single),
+                fmt(o.value.multiple),
+                fmt(o.value.total),
+                o.rays
+            );
+        }
+        println!("(luminance; {spp} samples per point, seed {seed})");
+    }
+    Ok(ExitCode::SUCCESS)
+}
