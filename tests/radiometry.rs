@@ -131,7 +131,7 @@ fn furnace_with_and_without_medium() {
             x,
             &Query::InScattered { omega_o: DVec2::X },
             &settings,
-            20_000,
+            60_000,
             1,
             k as u64,
         );
