@@ -129,7 +129,7 @@ impl Bvh {
     /// Binned SAH over both axes: (axis, split coordinate) minimising the cost.
     fn best_split(boxes: &[Aabb], centres: &[DVec2], idx: &[u32], cb: &Aabb) -> Option<(usize, f64)> {
         let mut best: Option<(f64, usize, f64)> = None;
-        for axis in 0..2 {
+        for axis in [0usize, 1] {
             let (lo, hi) = (cb.min[axis], cb.max[axis]);
             if hi - lo <= 0.0 {
                 continue;

@@ -63,6 +63,9 @@ use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
 use serde::Serialize;
 
+/// Per pixel: value of the selected part, std error of its luminance, defined?, rays.
+type PixelResult = (Rgb, f64, bool, u64);
+
 /// What to render.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FieldParams {
@@ -136,7 +139,7 @@ pub fn render_field(scene: &Scene, params: &FieldParams, progress: &Progress) ->
     let mut field = Field::new(w, h, scene.domain_min, scene.domain_max);
     let q = params.query();
     progress.start(h as u64);
-    let rows: Vec<Result<Vec<(Rgb, f64, bool, u64)>, Cancelled>> = (0..h)
+    let rows: Vec<Result<Vec<PixelResult>, Cancelled>> = (0..h)
         .into_par_iter()
         .map(|j| {
             let mut row = Vec::with_capacity(w);

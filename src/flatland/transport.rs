@@ -83,6 +83,7 @@ pub enum FirstEvent {
 /// Radiance arriving at `p` from direction `dir`, by a path starting with the ray
 /// p + t·dir. `lobe_pdf` is the pdf with which `dir` was sampled at `p` where `p`
 /// also did emitter NEE with MIS (None: no MIS, e.g. a fixed direction).
+#[allow(clippy::too_many_arguments)] // the path state is spelled out; bundling it hides nothing
 pub fn radiance_path(
     scene: &Scene,
     start: DVec2,

@@ -97,10 +97,10 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
                     c.fail(format!("{path}.aperture"), "zero-length aperture segment");
                 }
                 if ok && domain_ok {
-                    for k in 0..2 {
+                    for (k, end) in aperture.iter().enumerate() {
                         c.inside(
                             &format!("{path}.aperture[{k}]"),
-                            aperture[k],
+                            *end,
                             &d.domain,
                             "the aperture end",
                         );
