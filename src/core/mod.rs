@@ -1,7 +1,16 @@
 //! The numeric core shared by 2D and 3D: pure math, no scenes, files, threads or UI.
 
 pub mod color;
+pub mod distance;
+pub mod element;
+pub mod harmonics;
 pub mod phase;
 pub mod rng;
+pub mod space;
 pub mod stats;
+pub mod taylor;
+pub mod taylor_rgb;
+#[cfg(test)]
+mod testing;
 pub mod transmittance;
+pub mod triangle;

@@ -8,9 +8,85 @@
 //! Numerics for g → ±1: 1 + g² − 2gμ is written as (1−g)² + 2g(1−μ) (g ≥ 0) or
 //! (1+g)² − 2g(1+μ) (g < 0), with 1∓μ computed from |d_in ∓ d_out|²/2, which never
 //! cancels catastrophically.
+//!
+//! Derivatives with respect to the receiving point x (theory.md §5): light reaches x
+//! from an element centred at c, arriving from ω_j = (c − x)/|c − x| (travelling
+//! along −ω_j), and leaves along ω_o, so the phase factor is f(μ) with
+//! μ = −ω_j · ω_o; [`phase_taylor`] returns it with its gradient and Hessian in x,
+//! using the 2D HG for `D2` and the 3D HG for `D3` ([`hg_of_mu`]).
 
+use super::distance::{Offset, direction_along_from};
+use super::space::Space;
+use super::taylor::Taylor2;
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
+
+/// |g| is limited to this in the derivative functions: |g| = 1 is a Dirac delta with
+/// no finite derivatives; below it every value stays finite (theory.md §7).
+pub const G_MAX: f64 = 1.0 - 1e-12;
+
+/// HG value and derivatives in μ from D = 1 + g² − 2gμ (> 0) for dimension `S`:
+/// f = (1 − g²)/(|S^{d−1}| Dⁿ) with n = 1 (2D) or 3/2 (3D), f' = 2gn f/D,
+/// f'' = 4g²n(n+1) f/D².
+#[inline]
+fn hg_of_den<S: Space>(g: f64, den: f64) -> (f64, f64, f64) {
+    let den = den.max(f64::MIN_POSITIVE);
+    let (n, pow) = if S::DIM == 2 {
+        (1.0, den)
+    } else {
+        (1.5, den * den.sqrt())
+    };
+    let f = (1.0 - g) * (1.0 + g) / (S::SPHERE_MEASURE * pow);
+    let df = 2.0 * g * n * f / den;
+    let d2f = 4.0 * g * g * n * (n + 1.0) * f / (den * den);
+    (f, df, d2f)
+}
+
+/// The Henyey–Greenstein phase function of dimension `S` (2D: wrapped Cauchy, 3D:
+/// HG) as a function of μ, with df/dμ and d²f/dμ². 1 + g² − 2gμ is evaluated as
+/// (1 − g)² + 2g(1 − μ) (g ≥ 0) or (1 + g)² − 2g(1 + μ) (g < 0): no cancellation
+/// between 1 + g² and 2gμ. μ is clamped to [−1, 1] and |g| to [`G_MAX`].
+pub fn hg_of_mu<S: Space>(g: f64, mu: f64) -> (f64, f64, f64) {
+    if g == 0.0 {
+        return (1.0 / S::SPHERE_MEASURE, 0.0, 0.0);
+    }
+    let g = g.clamp(-G_MAX, G_MAX);
+    let mu = mu.clamp(-1.0, 1.0);
+    let den = if g >= 0.0 {
+        (1.0 - g) * (1.0 - g) + 2.0 * g * (1.0 - mu)
+    } else {
+        (1.0 + g) * (1.0 + g) - 2.0 * g * (1.0 + mu)
+    };
+    hg_of_den::<S>(g, den)
+}
+
+/// The phase factor f(−ω_j · ω_o) of light from an element centred at `c` received
+/// at `x` and scattered towards the unit vector `w_o`, with gradient and Hessian in x.
+///
+/// `soft` is the softening length of [`crate::core::distance`]: ω_j is replaced by
+/// u = (c − x)/√(|c − x|² + soft²), which keeps the derivatives bounded (≲ 1/soft,
+/// 1/soft²) when x nears c; pass a small fraction of the element's size.
+/// Isotropic media (g = 0) return the constant 1/|S^{d−1}| without any work.
+pub fn phase_taylor<S: Space>(g: f64, x: S::Vec, c: S::Vec, w_o: S::Vec, soft: f64) -> Taylor2<S> {
+    if g == 0.0 {
+        return Taylor2::constant(1.0 / S::SPHERE_MEASURE);
+    }
+    let g = g.clamp(-G_MAX, G_MAX);
+    let len = S::length(w_o);
+    let w = if len > 0.0 { w_o / len } else { S::axis(0) };
+    let o = Offset::<S>::new(x, c, soft);
+    // μ = −u·w. 1 ∓ μ from |u ± w|² and 1 − |u|² = ε²/r², so D never cancels.
+    let mu = -direction_along_from(&o, w);
+    let den = if g >= 0.0 {
+        let one_minus_mu = 0.5 * (S::length_squared(o.u + w) + o.soft_ratio2);
+        (1.0 - g) * (1.0 - g) + 2.0 * g * one_minus_mu
+    } else {
+        let one_plus_mu = 0.5 * (S::length_squared(o.u - w) + o.soft_ratio2);
+        (1.0 + g) * (1.0 + g) - 2.0 * g * one_plus_mu
+    };
+    let (f, df, d2f) = hg_of_den::<S>(g, den);
+    mu.compose(f, df, d2f)
+}
 
 /// 1 + g² − 2gμ for unit vectors a, b (μ = a·b), computed without cancellation.
 #[inline]
@@ -119,6 +195,135 @@ mod tests {
     use crate::core::rng::Sampler;
 
     const GS: [f64; 7] = [-0.95, -0.5, 0.0, 0.5, 0.95, 0.99, -0.99];
+
+    use crate::core::space::{D2, D3};
+    use crate::core::testing::*;
+    use num_dual::DualNum;
+
+    fn phase_ad_errors<S: Space>(seed: u64) -> f64 {
+        let mut s = Sampler::new(seed, 0);
+        let mut worst = 0.0f64;
+        for i in 0..600 {
+            let g = [-0.99, -0.5, 0.0, 0.3, 0.99][i % 5];
+            let soft = [0.0, 1e-3, 0.2][(i / 5) % 3];
+            let x = random_vec::<S>(&mut s, 1.0);
+            let c = random_vec::<S>(&mut s, 3.0);
+            let mut w = random_unit::<S>(&mut s);
+            if i % 7 == 0 {
+                // Close to the forward peak, where 1 + g² − 2gμ is smallest.
+                let d = c - x;
+                w = -(d / S::length(d)) + random_vec::<S>(&mut s, 1e-3);
+                w = w / S::length(w);
+            }
+            let got = phase_taylor::<S>(g, x, c, w, soft);
+            let want = ad_taylor::<S>(|xs| phase_ref::<S>(g, xs, c, w, soft), x);
+            let e = rel_err(&got, &want);
+            assert!(e < 1e-9, "g={g} soft={soft}: rel err {e:e}\n{got:?}\n{want:?}");
+            worst = worst.max(e);
+        }
+        worst
+    }
+
+    #[test]
+    fn phase_derivatives_match_ad() {
+        let e2 = phase_ad_errors::<D2>(21);
+        let e3 = phase_ad_errors::<D3>(22);
+        eprintln!("phase_taylor max rel AD error: 2D {e2:e}, 3D {e3:e}");
+        assert!(e2 < 1e-10 && e3 < 1e-10, "2D {e2:e}, 3D {e3:e}");
+    }
+
+    #[test]
+    fn hg_of_mu_matches_eval_and_its_mu_derivatives() {
+        for g in [-0.99, -0.3, 0.0, 0.6, 0.99] {
+            for k in 0..=40 {
+                let t = PI * k as f64 / 40.0;
+                let mu = t.cos();
+                let (f2, df2, d2f2) = hg_of_mu::<D2>(g, mu);
+                let (f3, df3, d2f3) = hg_of_mu::<D3>(g, mu);
+                let e2 = Hg2::new(g).eval_angle(t);
+                let e3 = Hg3::new(g).eval(DVec3::Z, DVec3::new(t.sin(), 0.0, mu));
+                assert!((f2 - e2).abs() <= 1e-12 * e2 && (f3 - e3).abs() <= 1e-12 * e3);
+                // d/dμ by a hyper-dual number in μ.
+                let m = HD::new(mu, 1.0, 1.0, 0.0);
+                let den = -m * (2.0 * g) + (1.0 + g * g);
+                let r2 = den.recip() * ((1.0 - g * g) / TAU);
+                let r3 = den.powf(-1.5) * ((1.0 - g * g) / (4.0 * PI));
+                for (a, b) in [(df2, r2.eps1), (d2f2, r2.eps1eps2), (df3, r3.eps1), (d2f3, r3.eps1eps2)] {
+                    assert!(
+                        (a - b).abs() <= 1e-10 * b.abs().max(1e-300),
+                        "g={g} mu={mu}: {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn isotropic_phase_is_constant() {
+        let t = phase_taylor::<D2>(0.0, DVec2::ZERO, DVec2::X, DVec2::Y, 0.0);
+        assert_eq!(t, Taylor2::constant(1.0 / TAU));
+        let t = phase_taylor::<D3>(0.0, DVec3::ZERO, DVec3::X, DVec3::Y, 0.0);
+        assert_eq!(t, Taylor2::constant(1.0 / (4.0 * PI)));
+    }
+
+    #[test]
+    fn phase_finite_at_extremes() {
+        let mut s = Sampler::new(23, 0);
+        for i in 0..4000 {
+            let g = [-0.999999, 0.999999, 1.0, -1.0, 0.5][i % 5];
+            let soft = [0.0, 1e-12, 1e-3][i % 3];
+            let x = random_vec::<D3>(&mut s, 1.0);
+            let c = if i % 4 == 0 {
+                x + random_vec::<D3>(&mut s, 1e-9)
+            } else {
+                random_vec::<D3>(&mut s, 1.0)
+            };
+            // Exactly on the forward and backward peaks, and at random.
+            let d = (c - x).normalize_or(DVec3::X);
+            let w = [-d, d, random_unit::<D3>(&mut s)][i % 3];
+            let t3 = phase_taylor::<D3>(g, x, c, w, soft);
+            assert!(t3.is_finite() && t3.value > 0.0, "g={g}: {t3:?}");
+            let (x2, c2, w2) = (x.truncate(), c.truncate(), w.truncate());
+            let t2 = phase_taylor::<D2>(g, x2, c2, w2, soft);
+            assert!(t2.is_finite() && t2.value >= 0.0, "g={g}: {t2:?}");
+        }
+    }
+
+    #[test]
+    fn phase_finite_differences_converge_at_second_order() {
+        let mut s = Sampler::new(24, 0);
+        let mut checked = 0;
+        for i in 0..40 {
+            let g = [-0.7, 0.5, 0.9][i % 3];
+            let x = random_vec::<D2>(&mut s, 1.0);
+            let c = random_vec::<D2>(&mut s, 1.0) + DVec2::new(3.0, 0.0);
+            let w = random_unit::<D2>(&mut s);
+            checked += assert_fd_order2::<D2>(|y| phase_taylor::<D2>(g, y, c, w, 0.0), x, 0.05) as usize;
+            let x = random_vec::<D3>(&mut s, 1.0);
+            let c = random_vec::<D3>(&mut s, 1.0) + DVec3::new(3.0, 0.0, 0.0);
+            let w = random_unit::<D3>(&mut s);
+            checked += assert_fd_order2::<D3>(|y| phase_taylor::<D3>(g, y, c, w, 0.1), x, 0.05) as usize;
+        }
+        assert!(checked > 60, "only {checked} measurable cases");
+    }
+
+    #[test]
+    fn phase_derivatives_rotate_with_the_scene() {
+        let mut s = Sampler::new(25, 0);
+        for _ in 0..100 {
+            let rot = glam::DMat3::from_axis_angle(random_unit::<D3>(&mut s), TAU * s.next_f64());
+            let shift = random_vec::<D3>(&mut s, 5.0);
+            let (x, c, w) = (
+                random_vec::<D3>(&mut s, 1.0),
+                random_vec::<D3>(&mut s, 2.0),
+                random_unit::<D3>(&mut s),
+            );
+            let a = phase_taylor::<D3>(0.8, x, c, w, 0.0);
+            let b = phase_taylor::<D3>(0.8, rot * x + shift, rot * c + shift, rot * w, 0.0);
+            let moved = Taylor2::<D3>::new(a.value, rot * a.grad, rot * a.hess * rot.transpose());
+            assert!(rel_err(&b, &moved) < 1e-12);
+        }
+    }
 
     /// Midpoint quadrature over the circle, fine enough for g = 0.99 (peak width ~0.01).
     fn circle_integral(f: impl Fn(f64) -> f64) -> f64 {

@@ -170,29 +170,51 @@ pub fn radiance_path(
     (l, first.unwrap_or(FirstEvent::Escape))
 }
 
-/// One sample of ∫ value(ω) L_i(x, ω) dω at `x` for a lobe, times `prefactor`, in parts.
-fn sample_at(
+/// One sample of ∫ value(ω) L_i(x, ω) dω at `x` for a lobe, times `prefactor`, in
+/// parts. `skip` is the segment `x` lies on, if any.
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
+pub fn sample_at(
     scene: &Scene,
     x: DVec2,
     lobe: &Lobe,
+    skip: Option<u32>,
     prefactor: Rgb,
     settings: &Settings,
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Parts {
     let mut parts = Parts {
-        direct: direct_lights(scene, x, lobe, None, rays),
-        single: emitter_nee(scene, x, lobe, None, true, s, rays),
+        direct: direct_lights(scene, x, lobe, skip, rays),
+        single: emitter_nee(scene, x, lobe, skip, true, s, rays),
         multiple: Rgb::ZERO,
     };
     let (w, weight, pdf) = lobe.sample(s);
-    let (l, first) = radiance_path(scene, x, w, None, Some(pdf), settings, s, rays);
+    let (l, first) = radiance_path(scene, x, w, skip, Some(pdf), settings, s, rays);
     match first {
         FirstEvent::Scatter => parts.multiple += weight * l,
         FirstEvent::Surface => parts.single += weight * l,
         FirstEvent::Escape => {}
     }
     parts.scaled(prefactor)
+}
+
+/// One sample of the radiance reflected by segment `seg` at its point `p` towards
+/// the side with unit normal `normal` (emission not included).
+pub fn sample_reflected(
+    scene: &Scene,
+    p: DVec2,
+    seg: u32,
+    normal: DVec2,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Rgb {
+    let reflectance = scene.geometry.segments[seg as usize].reflectance;
+    if reflectance == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let lobe = Lobe::Lambert { normal, reflectance };
+    sample_at(scene, p, &lobe, Some(seg), Rgb::ONE, settings, s, rays).total()
 }
 
 /// What to estimate at a point.
@@ -235,18 +257,18 @@ pub fn sample_query(scene: &Scene, x: DVec2, q: &Query, settings: &Settings, s: 
                     hg: m.phase,
                     travel: -omega_o,
                 };
-                sample_at(scene, x, &lobe, m.sigma_s, settings, s, rays)
+                sample_at(scene, x, &lobe, None, m.sigma_s, settings, s, rays)
             }
             None => Parts::default(),
         },
-        Query::Fluence => sample_at(scene, x, &Lobe::Uniform, Rgb::ONE, settings, s, rays),
+        Query::Fluence => sample_at(scene, x, &Lobe::Uniform, None, Rgb::ONE, settings, s, rays),
         Query::Irradiance { normal } => {
             // Lambert with ρ = 2 has value max(0, n·ω): the cosine-weighted integral.
             let lobe = Lobe::Lambert {
                 normal,
                 reflectance: Rgb::splat(2.0),
             };
-            sample_at(scene, x, &lobe, Rgb::ONE, settings, s, rays)
+            sample_at(scene, x, &lobe, None, Rgb::ONE, settings, s, rays)
         }
     }
 }

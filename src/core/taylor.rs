@@ -1,0 +1,164 @@
+//! Second-order Taylor data of a scalar field at a receiving point x: value,
+//! gradient and Hessian with respect to x (theory.md §5).
+//!
+//! An element's contribution L_j = f · T · L_o · F is a product of such fields, so
+//! [`Taylor2`] carries the product rule (`*`), sums (`+`, `-`, [`Sum`]), scaling by a
+//! constant (`* f64`) and the chain rule for a scalar function ([`Taylor2::compose`]).
+
+use super::space::Space;
+use std::iter::Sum;
+use std::ops::{Add, AddAssign, Mul, Neg, Sub};
+
+/// Value, gradient ∇ and Hessian H of a scalar function of the receiving point x.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Taylor2<S: Space> {
+    pub value: f64,
+    pub grad: S::Vec,
+    pub hess: S::Mat,
+}
+
+impl<S: Space> Taylor2<S> {
+    pub fn new(value: f64, grad: S::Vec, hess: S::Mat) -> Self {
+        Taylor2 { value, grad, hess }
+    }
+
+    /// A constant: zero gradient and Hessian.
+    pub fn constant(value: f64) -> Self {
+        Taylor2::new(value, S::zero(), S::zero_mat())
+    }
+
+    pub fn zero() -> Self {
+        Self::constant(0.0)
+    }
+
+    /// The i-th coordinate of x itself (gradient e_i, Hessian 0).
+    pub fn coordinate(x: S::Vec, i: usize) -> Self {
+        Taylor2::new(x[i], S::axis(i), S::zero_mat())
+    }
+
+    /// Chain rule for h(u(x)) given h(u), h'(u), h''(u):
+    /// ∇ = h' ∇u, H = h'' ∇u ∇uᵀ + h' H_u.
+    pub fn compose(self, h: f64, dh: f64, d2h: f64) -> Self {
+        Taylor2::new(h, self.grad * dh, S::outer(self.grad, self.grad) * d2h + self.hess * dh)
+    }
+
+    /// Multiply the value and its derivatives by a constant k (same as `self * k`).
+    pub fn scale(self, k: f64) -> Self {
+        self * k
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.value.is_finite() && S::vec_is_finite(self.grad) && S::mat_is_finite(self.hess)
+    }
+
+    /// Second-order extrapolation to x + dx.
+    pub fn extrapolate(&self, dx: S::Vec) -> f64 {
+        self.value + S::dot(self.grad, dx) + 0.5 * S::dot(dx, self.hess * dx)
+    }
+}
+
+impl<S: Space> Add for Taylor2<S> {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Taylor2::new(self.value + o.value, self.grad + o.grad, self.hess + o.hess)
+    }
+}
+
+impl<S: Space> AddAssign for Taylor2<S> {
+    fn add_assign(&mut self, o: Self) {
+        self.value += o.value;
+        self.grad += o.grad;
+        self.hess += o.hess;
+    }
+}
+
+impl<S: Space> Sub for Taylor2<S> {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        Taylor2::new(self.value - o.value, self.grad - o.grad, self.hess - o.hess)
+    }
+}
+
+impl<S: Space> Neg for Taylor2<S> {
+    type Output = Self;
+    fn neg(self) -> Self {
+        Taylor2::new(-self.value, -self.grad, -self.hess)
+    }
+}
+
+impl<S: Space> Mul<f64> for Taylor2<S> {
+    type Output = Self;
+    fn mul(self, k: f64) -> Self {
+        Taylor2::new(self.value * k, self.grad * k, self.hess * k)
+    }
+}
+
+/// Product rule: ∇(fg) = f∇g + g∇f, H(fg) = fH_g + gH_f + ∇f∇gᵀ + ∇g∇fᵀ.
+impl<S: Space> Mul for Taylor2<S> {
+    type Output = Self;
+    fn mul(self, o: Self) -> Self {
+        let cross = S::outer(self.grad, o.grad);
+        Taylor2::new(
+            self.value * o.value,
+            self.grad * o.value + o.grad * self.value,
+            self.hess * o.value + o.hess * self.value + cross + S::transpose(cross),
+        )
+    }
+}
+
+impl<S: Space> Sum for Taylor2<S> {
+    fn sum<I: Iterator<Item = Self>>(iter: I) -> Self {
+        iter.fold(Self::zero(), |a, b| a + b)
+    }
+}
+
+impl<S: Space> Default for Taylor2<S> {
+    fn default() -> Self {
+        Self::zero()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::space::{D2, D3};
+    use glam::{DMat2, DVec2, DVec3};
+
+    #[test]
+    fn product_and_chain_rule_on_polynomials() {
+        // f = x² y, g = x + 3y at (2, -1): fg = x³y + 3x²y².
+        let p = DVec2::new(2.0, -1.0);
+        let x = Taylor2::<D2>::coordinate(p, 0);
+        let y = Taylor2::<D2>::coordinate(p, 1);
+        let f = x * x * y;
+        let g = x + y * 3.0;
+        let fg = f * g;
+        let (xv, yv) = (p.x, p.y);
+        assert_eq!(fg.value, xv.powi(3) * yv + 3.0 * xv * xv * yv * yv);
+        let grad = DVec2::new(3.0 * xv * xv * yv + 6.0 * xv * yv * yv, xv.powi(3) + 6.0 * xv * xv * yv);
+        assert!((fg.grad - grad).length() < 1e-12);
+        let hxx = 6.0 * xv * yv + 6.0 * yv * yv;
+        let hxy = 3.0 * xv * xv + 12.0 * xv * yv;
+        let hyy = 6.0 * xv * xv;
+        let h = DMat2::from_cols(DVec2::new(hxx, hxy), DVec2::new(hxy, hyy));
+        assert!((fg.hess - h).abs_diff_eq(DMat2::ZERO, 1e-12));
+        // exp(g): ∇ = e^g ∇g, H = e^g ∇g∇gᵀ.
+        let e = g.compose(g.value.exp(), g.value.exp(), g.value.exp());
+        assert!((e.hess - D2::outer(g.grad, g.grad) * g.value.exp()).abs_diff_eq(DMat2::ZERO, 1e-15));
+        let s: Taylor2<D2> = [f, g, -g].into_iter().sum();
+        assert_eq!(s, f);
+    }
+
+    #[test]
+    fn extrapolation_is_exact_for_quadratics() {
+        let p = DVec3::new(0.5, 1.0, -2.0);
+        let x = Taylor2::<D3>::coordinate(p, 0);
+        let z = Taylor2::<D3>::coordinate(p, 2);
+        let q = x * z * 2.0 + z * z - x + Taylor2::constant(4.0);
+        let dx = DVec3::new(0.3, -0.2, 0.7);
+        let (a, c) = (p.x + dx.x, p.z + dx.z);
+        let exact = 2.0 * a * c + c * c - a + 4.0;
+        assert!((q.extrapolate(dx) - exact).abs() < 1e-13);
+        assert!(q.is_finite());
+    }
+}
