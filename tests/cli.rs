@@ -11,10 +11,31 @@ fn volcache() -> Command {
 #[test]
 fn field_writes_png_exr_and_json() {
     let dir = tempfile::tempdir().unwrap();
-    let (png, exr, json) = (dir.path().join("f.png"), dir.path().join("f.exr"), dir.path().join("f.json"));
+    let (png, exr, json) = (
+        dir.path().join("f.png"),
+        dir.path().join("f.exr"),
+        dir.path().join("f.json"),
+    );
     let out = volcache()
-        .args(["field", "flatland_scenes/windows.json", "--res", "40x30", "--spp", "4", "--seed", "3", "--quiet"])
-        .args(["--out", png.to_str().unwrap(), "--exr", exr.to_str().unwrap(), "--json", json.to_str().unwrap()])
+        .args([
+            "field",
+            "flatland_scenes/windows.json",
+            "--res",
+            "40x30",
+            "--spp",
+            "4",
+            "--seed",
+            "3",
+            "--quiet",
+        ])
+        .args([
+            "--out",
+            png.to_str().unwrap(),
+            "--exr",
+            exr.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -33,8 +54,23 @@ fn field_writes_png_exr_and_json() {
     // Same seed, same EXR.
     let exr2 = dir.path().join("g.exr");
     let out = volcache()
-        .args(["--threads", "1", "field", "flatland_scenes/windows.json", "--res", "40x30", "--spp", "4"])
-        .args(["--seed", "3", "--quiet", "--out", dir.path().join("g.png").to_str().unwrap()])
+        .args([
+            "--threads",
+            "1",
+            "field",
+            "flatland_scenes/windows.json",
+            "--res",
+            "40x30",
+            "--spp",
+            "4",
+        ])
+        .args([
+            "--seed",
+            "3",
+            "--quiet",
+            "--out",
+            dir.path().join("g.png").to_str().unwrap(),
+        ])
         .args(["--exr", exr2.to_str().unwrap()])
         .output()
         .unwrap();
@@ -45,7 +81,17 @@ fn field_writes_png_exr_and_json() {
 #[test]
 fn probe_prints_parts_as_json() {
     let out = volcache()
-        .args(["probe", "flatland_scenes/point_in_fog.json", "--at", "1,0", "--at", "-0.5,0.5", "--spp", "2000", "--json"])
+        .args([
+            "probe",
+            "flatland_scenes/point_in_fog.json",
+            "--at",
+            "1,0",
+            "--at",
+            "-0.5,0.5",
+            "--spp",
+            "2000",
+            "--json",
+        ])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -64,8 +110,15 @@ fn probe_prints_parts_as_json() {
 fn bad_scene_fails_with_file_and_field_named() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.json");
-    std::fs::write(&bad, r#"{"domain": {"min": [0,0], "max": [1,1]}, "medium": {"sigma_a": -1, "sigma_s": 1}}"#).unwrap();
-    let out = volcache().args(["field", bad.to_str().unwrap(), "--quiet"]).output().unwrap();
+    std::fs::write(
+        &bad,
+        r#"{"domain": {"min": [0,0], "max": [1,1]}, "medium": {"sigma_a": -1, "sigma_s": 1}}"#,
+    )
+    .unwrap();
+    let out = volcache()
+        .args(["field", bad.to_str().unwrap(), "--quiet"])
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.json") && err.contains("medium.sigma_a"), "{err}");
@@ -82,12 +135,23 @@ fn interrupt_keeps_previous_output() {
     let png = dir.path().join("keep.png");
     std::fs::write(&png, b"previous good file").unwrap();
     let mut child = volcache()
-        .args(["field", "flatland_scenes/windows.json", "--res", "400x300", "--spp", "100000", "--quiet"])
+        .args([
+            "field",
+            "flatland_scenes/windows.json",
+            "--res",
+            "400x300",
+            "--spp",
+            "100000",
+            "--quiet",
+        ])
         .args(["--out", png.to_str().unwrap()])
         .spawn()
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(800));
-    let killed = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
     assert!(killed.success());
     let status = child.wait().unwrap();
     assert_eq!(status.code(), Some(130));

@@ -8,8 +8,8 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use volcache::core::rng::Sampler;
 use volcache::core::color::Rgb;
+use volcache::core::rng::Sampler;
 use volcache::flatland::geometry::{Accel, Segment, SegmentSet};
 use volcache::flatland::scene::Scene;
 use volcache::flatland::transport::{Query, Settings, estimate};
@@ -147,7 +147,12 @@ fn flatland(b: FlatlandBench) -> anyhow::Result<ExitCode> {
         };
         let rays = random_rays(&many, 20_000)
             .into_iter()
-            .map(|(o, d)| ((o - many.domain_min) / (many.domain_max - many.domain_min) * 2.0 - 1.0, d))
+            .map(|(o, d)| {
+                (
+                    (o - many.domain_min) / (many.domain_max - many.domain_min) * 2.0 - 1.0,
+                    d,
+                )
+            })
             .collect::<Vec<_>>();
         let t = b.seconds / 8.0;
         let (nb, sb) = time_queries(&set(Accel::Bvh), &rays, t);

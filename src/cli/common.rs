@@ -68,7 +68,11 @@ impl ProgressUi {
     pub fn new(label: &str, show_bar: bool) -> ProgressUi {
         let progress = Arc::new(Progress::new());
         watch_ctrl_c(&progress);
-        let bar = if show_bar { ProgressBar::new(1) } else { ProgressBar::hidden() };
+        let bar = if show_bar {
+            ProgressBar::new(1)
+        } else {
+            ProgressBar::hidden()
+        };
         bar.set_style(
             ProgressStyle::with_template("{msg} [{bar:40.cyan/blue}] {percent:>3}% {elapsed_precise} (eta {eta})")
                 .expect("valid template")

@@ -4,6 +4,7 @@ mod bench;
 mod common;
 mod field;
 mod probe;
+mod probe_derivs;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -12,11 +12,17 @@ use volcache::core::color::{Rgb, luminance};
 use volcache::flatland::scene_desc::Quantity;
 use volcache::flatland::transport::{Parts, Query, Settings, estimate};
 
-#[derive(Clone, Copy, Debug, ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, ValueEnum, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
-    /// Reference path tracing.
+    /// Path-traced value (no derivatives).
     Pt,
+    /// Occlusion-aware value, gradient and Hessian from proxy elements (ours).
+    Aware,
+    /// Occlusion-unaware value and gradient (Jarosz et al. 2008).
+    Unaware,
+    /// Central finite differences of path-traced L_s with common random numbers.
+    Reference,
 }
 
 #[derive(Args, Debug)]
@@ -38,6 +44,24 @@ pub struct ProbeArgs {
     /// Outgoing direction ω_o of L_s in degrees.
     #[arg(long, allow_hyphen_values = true)]
     pub omega_o: Option<f64>,
+    /// Directions per light field (aware, unaware).
+    #[arg(long, default_value_t = 4096)]
+    pub rays: usize,
+    /// Recursive paths per hit and per medium sample (aware, unaware).
+    #[arg(long, default_value_t = 1)]
+    pub paths: u32,
+    /// Ray-marched medium samples per ray (aware, unaware).
+    #[arg(long, default_value_t = 24)]
+    pub steps: usize,
+    /// Finite-difference step as a fraction of the scene size (reference).
+    #[arg(long, default_value_t = 4e-3)]
+    pub fd_step: f64,
+    /// Near-field clamp of medium elements, in march steps (aware).
+    #[arg(long, default_value_t = 1.0)]
+    pub medium_clamp: f64,
+    /// Which radiance a proxy element carries (aware).
+    #[arg(long, value_enum, default_value = "farther")]
+    pub rule: volcache::flatland::proxy::RadianceRule,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -80,6 +104,9 @@ struct ProbeOut {
 }
 
 pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
+    if a.method != Method::Pt {
+        return super::probe_derivs::run(&a);
+    }
     let scene = load_scene(a.scene.as_deref())?;
     let r = &scene.desc.render;
     let spp = a.spp.unwrap_or(r.spp.saturating_mul(64));

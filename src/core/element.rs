@@ -74,9 +74,16 @@ fn vertex_angle_derivatives(p: DVec2, x: DVec2, r_min: f64) -> (DVec2, DMat2) {
 /// b − x is counter-clockwise from a − x), with ∇F = ∇θ_b − ∇θ_a and H F = Hθ_b − Hθ_a
 /// (theory.md §5), clamped near the endpoints as described in the module docs.
 pub fn segment_form_factor(a: DVec2, b: DVec2, x: DVec2) -> Taylor2<D2> {
+    segment_form_factor_clamped(a, b, x, near_distance((b - a).length()))
+}
+
+/// [`segment_form_factor`] with an explicit clamping distance `r_min` for the
+/// derivatives (the value is exact): callers whose elements sample a field at some
+/// resolution (ray-marched medium shells) bound the near field by that resolution.
+pub fn segment_form_factor_clamped(a: DVec2, b: DVec2, x: DVec2, r_min: f64) -> Taylor2<D2> {
     let (pa, pb) = (a - x, b - x);
     let value = pa.perp_dot(pb).atan2(pa.dot(pb));
-    let r_min = near_distance((b - a).length());
+    let r_min = r_min.max(MIN_DISTANCE);
     let (ga, ha) = vertex_angle_derivatives(a, x, r_min);
     let (gb, hb) = vertex_angle_derivatives(b, x, r_min);
     Taylor2::new(value, gb - ga, hb - ha)
@@ -104,6 +111,28 @@ pub fn medium_form_factor<S: Space>(c: S::Vec, measure: f64, x: S::Vec) -> Taylo
     let n = (S::DIM - 1) as f64;
     let h = m / r.value.powi(S::DIM as i32 - 1);
     r.compose(h, -n * h / r.value, n * (n + 1.0) * h / (r.value * r.value))
+}
+
+/// A medium piece sampled at resolution `eps` (e.g. the ray-marching step): the
+/// value is the exact measure/r^{d−1} (clamped at [`MIN_DISTANCE`]), the gradient and
+/// Hessian are those of the kernel softened to r = √(|c − x|² + eps²). The softened
+/// kernel's Laplacian integrates to zero over the plane/space, so a constant field
+/// sampled densely at that resolution gives a zero Hessian, where the raw 1/r^{d−1}
+/// kernel would add a positive near-field bias (its Laplacian is positive off the
+/// origin and the balancing singular part is never sampled).
+pub fn medium_form_factor_smoothed<S: Space>(c: S::Vec, measure: f64, x: S::Vec, eps: f64) -> Taylor2<S> {
+    let m = measure.max(0.0);
+    if m == 0.0 {
+        return Taylor2::zero();
+    }
+    let soft = eps.max(medium_softening::<S>(m));
+    let r = distance_from(&Offset::<S>::new(x, c, soft));
+    let n = (S::DIM - 1) as f64;
+    let h = m / r.value.powi(S::DIM as i32 - 1);
+    let mut t = r.compose(h, -n * h / r.value, n * (n + 1.0) * h / (r.value * r.value));
+    let exact = S::length(c - x).max(MIN_DISTANCE);
+    t.value = m / exact.powi(S::DIM as i32 - 1);
+    t
 }
 
 #[cfg(test)]

@@ -6,14 +6,24 @@
 //!   a world → pixel [`View`].
 //! - [`colorbar`]: false-colour scales, ticks and the colour bar.
 //! - [`field_figure`](mod@field_figure): a radiance field as a finished figure.
+//! - [`gradient_color`](mod@gradient_color): gradients coloured by direction and log magnitude, and the
+//!   colour wheel explaining it.
+//! - [`gradient_figure`](mod@gradient_figure): the paper's gradient figure (panels per
+//!   method) and the gradient's profile along a line.
+//! - [`axis`], [`plot`]: line plots (linear or log axes, legends), alone or stacked.
 //!
 //! Files are written by [`crate::output`] (atomic PNG/EXR/JSON writers).
 
+pub mod axis;
 pub mod colorbar;
 pub mod colormap;
 pub mod field_figure;
+pub mod gradient_color;
+pub mod gradient_figure;
 pub mod overlay;
 pub mod panel;
+pub mod plot;
+mod plot_series;
 pub mod text;
 
 pub use colorbar::{ColorScale, Tick, colorbar_width, draw_colorbar};
@@ -22,6 +32,16 @@ pub use field_figure::{
     FieldStyle, FigureOptions, INVALID_RGB, MappedField, NAN_RGB, field_color_scale, field_figure, field_figure_with,
     field_to_rgba, upscale_factor,
 };
+pub use gradient_color::{
+    GradientSample, colour_wheel_legend, gradient_brightness, gradient_color, grid_spacing, magnitude_range,
+};
+pub use gradient_figure::{
+    AWARE_PURPLE, GradientProfile, GradientStyle, REFERENCE_BLUE, UNAWARE_ORANGE, gradient_figure, gradient_line_plot,
+    gradient_panel,
+};
 pub use overlay::{OverlayStyle, draw_scene};
 pub use panel::{Canvas, View};
+pub use plot::{
+    Axis, AxisMap, AxisTick, LineStyle, Plot, PlotLayout, Scale, Series, draw_plot, draw_plot_into, draw_plots_stacked,
+};
 pub use text::{HAlign, VAlign, draw_text, draw_text_aligned, draw_text_vertical, text_metrics, text_width};

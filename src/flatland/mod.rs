@@ -8,6 +8,7 @@ pub mod geometry;
 pub mod lights;
 pub mod medium;
 pub mod probe;
+pub mod proxy;
 pub mod scene;
 pub mod scene_desc;
 pub mod transport;

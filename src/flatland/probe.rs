@@ -6,9 +6,12 @@
 //! paths per hit and per medium sample), `steps` (medium samples per ray over the
 //! march length), `settings` (the path tracer's). The march length is the distance
 //! to the hit, capped where the transmittance falls below `transmittance_cutoff`
-//! (and at `far_factor` × the scene size). Medium samples share one jittered offset
-//! per probe, so neighbouring rays' samples form "shells" at equal depths, which
-//! the proxy connects into elements.
+//! (and at `far_factor` × the scene size). Medium samples are stratified along each
+//! ray with the ray's own jittered offset: sample i sits at depth (i + ξ_k)·Δt, so
+//! the i-th samples of neighbouring rays form "shells" (within Δt of each other)
+//! which the proxy connects into elements. (A single offset shared by all rays
+//! makes the shells exact but correlates the rays' errors: measured 17% bias of the
+//! multiple-scattering value on occluder.json with 24 steps, gone with per-ray jitter.)
 
 use super::direct::DirectLight;
 use super::medium::Medium;
@@ -68,9 +71,11 @@ pub struct ProbeRay {
     /// Distance to the hit, or where the ray was cut (transmittance or far limit).
     pub length: f64,
     pub hit: Option<SurfaceHit>,
-    /// Medium samples: L_s(m, −dir) (σ_s included) at depth `shell_depth(i)`, for
+    /// Medium samples: L_s(m, −dir) (σ_s included) at depth (i + offset)·step, for
     /// i < samples.len(); zero outside the medium region.
     pub samples: Vec<Rgb>,
+    /// Jitter of this ray's medium samples, in [0, 1).
+    pub offset: f64,
 }
 
 /// The light field at one point.
@@ -79,9 +84,8 @@ pub struct LightField {
     pub x: DVec2,
     pub omega_o: DVec2,
     pub rays: Vec<ProbeRay>,
-    /// Depth of medium shell i is (i + offset) · step.
+    /// Spacing Δt of the ray-marched medium samples.
     pub step: f64,
-    pub offset: f64,
     /// Direct light (point and collimated lights) analytically, per light.
     pub direct_lights: Vec<DirectLight>,
     /// σ_s, σ_t at x (zero without a medium).
@@ -94,8 +98,9 @@ pub struct LightField {
 }
 
 impl LightField {
-    pub fn shell_depth(&self, i: usize) -> f64 {
-        (i as f64 + self.offset) * self.step
+    /// Depth of medium sample i of `ray`.
+    pub fn sample_depth(&self, ray: &ProbeRay, i: usize) -> f64 {
+        (i as f64 + ray.offset) * self.step
     }
 
     /// The angle per ray, 2π/N.
@@ -130,8 +135,6 @@ pub fn capture(
     let start = std::time::Instant::now();
     let medium = scene.medium.as_ref();
     let (t_cut, step) = march(medium, scene.scale(), ps);
-    let mut s0 = Sampler::new2(seed, item, u64::MAX);
-    let offset = s0.next_f64();
     let n = ps.rays.max(3);
     let rays: Vec<Result<(ProbeRay, u64), Cancelled>> = (0..n)
         .into_par_iter()
@@ -139,6 +142,7 @@ pub fn capture(
             progress.check()?;
             let mut s = Sampler::new2(seed, item, k as u64);
             let theta = TAU * (k as f64 + s.next_f64()) / n as f64;
+            let offset = s.next_f64();
             let dir = DVec2::from_angle(theta);
             let mut rays = 1u64;
             let hit = scene.geometry.closest_hit(x, dir, f64::INFINITY, None);
@@ -191,6 +195,7 @@ pub fn capture(
                     length,
                     hit: hit_record,
                     samples,
+                    offset,
                 },
                 rays,
             ))
@@ -210,7 +215,6 @@ pub fn capture(
         omega_o,
         rays: out,
         step,
-        offset,
         direct_lights,
         sigma_s: m.map_or(Rgb::ZERO, |m| m.sigma_s),
         sigma_t: m.map_or(Rgb::ZERO, |m| m.sigma_t),

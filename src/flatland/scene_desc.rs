@@ -175,10 +175,18 @@ impl TryFrom<RawLight> for LightDesc {
     type Error = String;
     fn try_from(r: RawLight) -> Result<Self, String> {
         let need = |name: &str, present: bool, kind: &str| {
-            if present { Ok(()) } else { Err(format!("missing field `{name}` (required for a {kind} light)")) }
+            if present {
+                Ok(())
+            } else {
+                Err(format!("missing field `{name}` (required for a {kind} light)"))
+            }
         };
         let forbid = |name: &str, present: bool, kind: &str| {
-            if present { Err(format!("field `{name}` does not apply to a {kind} light")) } else { Ok(()) }
+            if present {
+                Err(format!("field `{name}` does not apply to a {kind} light"))
+            } else {
+                Ok(())
+            }
         };
         match r.kind {
             None => Err("missing field `type` (\"point\" or \"collimated\")".into()),
@@ -188,7 +196,10 @@ impl TryFrom<RawLight> for LightDesc {
                 forbid("direction", r.direction.is_some(), "point")?;
                 forbid("aperture", r.aperture.is_some(), "point")?;
                 forbid("irradiance", r.irradiance.is_some(), "point")?;
-                Ok(LightDesc::Point { position: r.position.unwrap(), intensity: r.intensity.unwrap() })
+                Ok(LightDesc::Point {
+                    position: r.position.unwrap(),
+                    intensity: r.intensity.unwrap(),
+                })
             }
             Some(LightKind::Collimated) => {
                 need("direction", r.direction.is_some(), "collimated")?;
@@ -215,7 +226,11 @@ impl From<LightDesc> for RawLight {
                 intensity: Some(intensity),
                 ..Default::default()
             },
-            LightDesc::Collimated { direction, aperture, irradiance } => RawLight {
+            LightDesc::Collimated {
+                direction,
+                aperture,
+                irradiance,
+            } => RawLight {
                 kind: Some(LightKind::Collimated),
                 direction: Some(direction),
                 aperture: Some(aperture),

@@ -98,12 +98,7 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
                 }
                 if ok && domain_ok {
                     for (k, end) in aperture.iter().enumerate() {
-                        c.inside(
-                            &format!("{path}.aperture[{k}]"),
-                            *end,
-                            &d.domain,
-                            "the aperture end",
-                        );
+                        c.inside(&format!("{path}.aperture[{k}]"), *end, &d.domain, "the aperture end");
                     }
                 }
                 c.color(&format!("{path}.irradiance"), irradiance, None);

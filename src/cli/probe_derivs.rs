@@ -1,0 +1,178 @@
+//! `volcache probe --method aware|unaware|reference`: L_s with gradient and Hessian
+//! (and the Hessian's eigen-decomposition) per part.
+
+use super::common::load_scene;
+use super::probe::{Method, ProbeArgs};
+use glam::DVec2;
+use serde::Serialize;
+use std::process::ExitCode;
+use volcache::core::space::{D2, Space};
+use volcache::core::taylor::Taylor2;
+use volcache::core::taylor_rgb::TaylorRgb;
+use volcache::flatland::derivatives::{self, AwareSettings, Derivatives, PartDerivs, ReferenceSettings};
+use volcache::flatland::probe::{ProbeSettings, capture};
+use volcache::flatland::proxy;
+use volcache::flatland::transport::Settings;
+use volcache::progress::Progress;
+
+#[derive(Serialize)]
+pub struct TaylorOut {
+    pub value: f64,
+    pub gradient: [f64; 2],
+    pub hessian: [[f64; 2]; 2],
+    /// Ascending eigenvalues of the Hessian and their unit eigenvectors.
+    pub eigenvalues: [f64; 2],
+    pub eigenvectors: [[f64; 2]; 2],
+}
+
+impl From<&Taylor2<D2>> for TaylorOut {
+    fn from(t: &Taylor2<D2>) -> Self {
+        let (vals, vecs) = D2::sym_eigen(t.hess);
+        TaylorOut {
+            value: t.value,
+            gradient: t.grad.to_array(),
+            hessian: [t.hess.x_axis.to_array(), t.hess.y_axis.to_array()],
+            eigenvalues: vals.to_array(),
+            eigenvectors: [vecs.x_axis.to_array(), vecs.y_axis.to_array()],
+        }
+    }
+}
+
+#[derive(Serialize)]
+pub struct PartOut {
+    /// Luminance with its derivatives (what the error metric uses).
+    pub luminance: TaylorOut,
+    /// Per channel value, gradient and Hessian.
+    pub rgb: [TaylorOut; 3],
+}
+
+impl From<&TaylorRgb<D2>> for PartOut {
+    fn from(t: &TaylorRgb<D2>) -> Self {
+        PartOut {
+            luminance: (&t.luminance()).into(),
+            rgb: t.channels.each_ref().map(|c| c.into()),
+        }
+    }
+}
+
+#[derive(Serialize)]
+pub struct DerivOut {
+    pub at: [f64; 2],
+    pub method: Method,
+    pub has_hessian: bool,
+    pub direct: PartOut,
+    pub single: PartOut,
+    pub multiple: PartOut,
+    pub total: PartOut,
+    pub rays: u64,
+    pub seconds: f64,
+}
+
+/// Run one derivative method at a point.
+pub fn compute(
+    scene: &volcache::flatland::scene::Scene,
+    x: DVec2,
+    omega_o: DVec2,
+    method: Method,
+    ps: &ProbeSettings,
+    rs: &ReferenceSettings,
+    aw: &AwareSettings,
+    seed: u64,
+) -> anyhow::Result<Derivatives> {
+    Ok(match method {
+        Method::Reference => derivatives::reference(scene, x, omega_o, rs, &ps.settings, seed),
+        Method::Aware | Method::Unaware => {
+            let start = std::time::Instant::now();
+            let lf =
+                capture(scene, x, omega_o, ps, seed, 0, &Progress::new()).map_err(|_| anyhow::anyhow!("cancelled"))?;
+            let (parts, aware) = if method == Method::Aware {
+                (derivatives::aware(&lf, &proxy::build(&lf, aw.rule), aw), true)
+            } else {
+                (derivatives::unaware(&lf), false)
+            };
+            Derivatives {
+                method: if aware {
+                    derivatives::Method::Aware
+                } else {
+                    derivatives::Method::Unaware
+                },
+                at: x,
+                parts,
+                has_hessian: aware,
+                rays: lf.cost_rays,
+                seconds: start.elapsed().as_secs_f64(),
+            }
+        }
+        Method::Pt => unreachable!("pt has no derivatives"),
+    })
+}
+
+pub fn run(a: &ProbeArgs) -> anyhow::Result<ExitCode> {
+    let scene = load_scene(a.scene.as_deref())?;
+    let r = &scene.desc.render;
+    anyhow::ensure!(a.rays >= 3, "--rays must be at least 3");
+    anyhow::ensure!(a.fd_step > 0.0 && a.fd_step.is_finite(), "--fd-step must be positive");
+    let seed = a.seed.unwrap_or(r.seed);
+    let omega_deg = a.omega_o.unwrap_or(r.omega_o_deg);
+    let omega_o = DVec2::from_angle(omega_deg.to_radians());
+    let settings = Settings {
+        max_depth: r.max_depth,
+        ..Settings::default()
+    };
+    let ps = ProbeSettings {
+        rays: a.rays,
+        paths: a.paths.max(1),
+        steps: a.steps.max(1),
+        settings,
+        ..Default::default()
+    };
+    let rs = ReferenceSettings {
+        spp: a.spp.unwrap_or(ReferenceSettings::default().spp),
+        relative_step: a.fd_step,
+    };
+    let mut outs = Vec::new();
+    for &x in &a.at {
+        let aw = AwareSettings {
+            medium_clamp: a.medium_clamp,
+            rule: a.rule,
+        };
+        let d = compute(&scene, x, omega_o, a.method, &ps, &rs, &aw, seed)?;
+        outs.push(to_out(&d, a.method));
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&outs)?);
+    } else {
+        for o in &outs {
+            let t = &o.total.luminance;
+            println!(
+                "({}, {}) {:?}: L = {:.5e}  ∇L = ({:.4e}, {:.4e})  λ(H) = ({:.4e}, {:.4e})  [{} rays, {:.2} s]",
+                o.at[0],
+                o.at[1],
+                o.method,
+                t.value,
+                t.gradient[0],
+                t.gradient[1],
+                t.eigenvalues[0],
+                t.eigenvalues[1],
+                o.rays,
+                o.seconds
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn to_out(d: &Derivatives, method: Method) -> DerivOut {
+    let p: &PartDerivs = &d.parts;
+    DerivOut {
+        at: d.at.to_array(),
+        method,
+        has_hessian: d.has_hessian,
+        direct: (&p.direct).into(),
+        single: (&p.single).into(),
+        multiple: (&p.multiple).into(),
+        total: (&p.total()).into(),
+        rays: d.rays,
+        seconds: d.seconds,
+    }
+}
