@@ -223,3 +223,17 @@ fn cancelled_render_returns_cancelled() {
     progress.cancel();
     assert!(render_field(&s, &p, &progress).is_err());
 }
+
+/// A thin, non-absorbing, unbounded fog cannot keep paths scattering forever far
+/// away: they leave the world disc and end (no hang, bounded cost per sample).
+#[test]
+fn thin_unbounded_fog_terminates_paths() {
+    let s = scene(
+        r#"{ "domain": {"min": [-1,-1], "max": [1,1]},
+        "segments": [{"a": [-0.5, 0.9], "b": [0.5, 0.9], "emission": 1}],
+        "medium": {"sigma_a": 0, "sigma_s": 1e-6} }"#,
+    );
+    let e = estimate(&s, DVec2::ZERO, &Query::InScattered { omega_o: DVec2::X }, &Settings::default(), 1000, 0, 0);
+    assert!(e.rays < 10 * 1000, "{} rays for 1000 samples", e.rays);
+    assert!(e.mean.total().x > 0.0 && e.mean.total().x.is_finite());
+}

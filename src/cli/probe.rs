@@ -54,7 +54,7 @@ pub struct ProbeArgs {
     #[arg(long, default_value_t = 24)]
     pub steps: usize,
     /// Finite-difference step as a fraction of the scene size (reference).
-    #[arg(long, default_value_t = 4e-3)]
+    #[arg(long, default_value_t = 1e-2)]
     pub fd_step: f64,
     /// Near-field clamp of medium elements, in march steps (aware).
     #[arg(long, default_value_t = 1.0)]

@@ -209,6 +209,20 @@ impl Scene {
         (self.domain_max - self.domain_min).length()
     }
 
+    /// Radius of the world disc (around the domain centre) where unbounded media
+    /// end, in scene sizes.
+    pub const WORLD_RADIUS: f64 = 1e3;
+
+    /// Distance along p + t·d to the boundary of the world disc (0 outside it).
+    pub fn world_exit(&self, p: DVec2, d: DVec2) -> f64 {
+        let c = 0.5 * (self.domain_min + self.domain_max);
+        let r = Self::WORLD_RADIUS * self.scale();
+        let o = p - c;
+        let b = o.dot(d);
+        let disc = b * b - (o.length_squared() - r * r);
+        if disc <= 0.0 { 0.0 } else { (-b + disc.sqrt()).max(0.0) }
+    }
+
     /// Probability of picking emitter number `k` (index into `emitters`).
     pub fn emitter_probability(&self, k: usize) -> f64 {
         self.emitter_cdf[k] - if k == 0 { 0.0 } else { self.emitter_cdf[k - 1] }

@@ -101,7 +101,9 @@ pub fn radiance_path(
     for depth in 1..=settings.max_depth {
         *rays += 1;
         let hit = scene.geometry.closest_hit(p, dir, f64::INFINITY, skip);
-        let s_max = hit.map_or(f64::INFINITY, |h| h.t);
+        // An unbounded medium ends at the world disc: paths leaving it escape, so a
+        // thin non-absorbing fog cannot keep a path scattering far away forever.
+        let s_max = hit.map_or_else(|| scene.world_exit(p, dir), |h| h.t);
         let flight = match &scene.medium {
             Some(m) => m.sample_flight(p, dir, s_max, s),
             None => Flight::Pass { weight: Rgb::ONE },
