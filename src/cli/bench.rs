@@ -19,6 +19,10 @@ use volcache::output::write_json;
 pub enum BenchCommand {
     /// Ray–segment queries/s (with and without the BVH) and path samples/s.
     Flatland(FlatlandBench),
+    /// Cost of one cache point: plain value, unaware and aware derivatives, per N.
+    Derivatives(super::bench_derivs::DerivBench),
+    /// Error vs time and vs cache count: ours, jarosz08 (ε swept) and pt (spp swept).
+    Tradeoff(super::bench_tradeoff::TradeoffArgs),
 }
 
 #[derive(Args, Debug)]
@@ -76,6 +80,8 @@ struct Report {
 pub fn run(cmd: BenchCommand) -> anyhow::Result<ExitCode> {
     match cmd {
         BenchCommand::Flatland(b) => flatland(b),
+        BenchCommand::Derivatives(b) => super::bench_derivs::run(b),
+        BenchCommand::Tradeoff(b) => super::bench_tradeoff::run(b),
     }
 }
 

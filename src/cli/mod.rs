@@ -1,10 +1,17 @@
 //! Command-line definitions (clap) and dispatch.
 
 mod bench;
+mod bench_derivs;
+mod bench_tradeoff;
+mod caches;
+mod caches_figures;
 mod common;
 mod field;
+mod figure;
+mod figure_draw;
 mod probe;
 mod probe_derivs;
+mod reference;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -29,9 +36,15 @@ enum Command {
     Field(field::FieldArgs),
     /// Estimate L_s (or fluence) and its parts at points, printed as a table or JSON.
     Probe(probe::ProbeArgs),
+    /// Reconstruct the field from a radiance cache (ours, jarosz08) or path tracing (pt), with
+    /// the cache distribution, the error map against a reference and the costs.
+    Caches(caches::CachesArgs),
     /// Benchmarks that print figures and write JSON.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+    /// Figures of the paper, computed and drawn (PNG + JSON with every number).
+    #[command(subcommand)]
+    Figure(figure::FigureCommand),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
@@ -41,6 +54,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Field(a) => field::run(a),
         Command::Probe(a) => probe::run(a),
+        Command::Caches(a) => caches::run(a),
         Command::Bench(b) => bench::run(b),
+        Command::Figure(f) => figure::run(f),
     }
 }

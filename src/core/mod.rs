@@ -1,9 +1,12 @@
 //! The numeric core shared by 2D and 3D: pure math, no scenes, files, threads or UI.
 
+pub mod cache;
+mod cache_index;
 pub mod color;
 pub mod distance;
 pub mod element;
 pub mod harmonics;
+pub mod metric;
 pub mod phase;
 pub mod rng;
 pub mod space;

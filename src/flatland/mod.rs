@@ -1,6 +1,7 @@
 //! The paper's self-contained 2D ("flatland") model of light transport in media.
 
 pub mod bvh;
+pub mod cached_field;
 pub mod derivatives;
 pub mod direct;
 pub mod field;

@@ -1,0 +1,124 @@
+//! `volcache bench tradeoff`: what users trade, time against error. Both cache
+//! methods are swept over target record counts (ε found by bisection, then the
+//! placement re-run from scratch so its time is honest) and path tracing over
+//! samples per pixel; error against one reference field (cached on disk).
+
+use super::caches::{CacheArgs, MethodArg, MethodRun, field_params, run_method};
+use super::common::{load_scene, scene_stem, wrote};
+use super::reference::{ReferenceInfo, reference_field};
+use clap::Args;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use volcache::figure::axis::Axis;
+use volcache::figure::gradient_figure::{AWARE_PURPLE, REFERENCE_BLUE, UNAWARE_ORANGE};
+use volcache::figure::plot::{LineStyle, Plot, Series, draw_plot_into};
+use volcache::flatland::field::{FieldParams, field_errors};
+use volcache::output::{write_json, write_png};
+use volcache::progress::Progress;
+
+#[derive(Args, Debug)]
+pub struct TradeoffArgs {
+    /// Scene JSON (default: the embedded occluder scene).
+    pub scene: Option<PathBuf>,
+    /// Target record counts for the cache methods.
+    #[arg(long, value_delimiter = ',', default_values_t = [50usize, 100, 200, 400, 800])]
+    pub counts: Vec<usize>,
+    /// Samples per pixel for path tracing.
+    #[arg(long, value_delimiter = ',', default_values_t = [1u32, 4, 16, 64, 256])]
+    pub spps: Vec<u32>,
+    #[command(flatten)]
+    pub cache: CacheArgs,
+    #[arg(long, default_value = "results")]
+    pub out: PathBuf,
+}
+
+#[derive(Serialize)]
+struct Point {
+    method: MethodArg,
+    target: Option<usize>,
+    spp: Option<u32>,
+    #[serde(flatten)]
+    run: MethodRun,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    scene: &'a str,
+    params: &'a FieldParams,
+    rays_per_cache: usize,
+    per_part: bool,
+    reference: &'a ReferenceInfo,
+    points: &'a [Point],
+}
+
+pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
+    let scene = load_scene(a.scene.as_deref())?;
+    let stem = scene_stem(a.scene.as_deref());
+    let fp = field_params(&scene, &a.cache);
+    let ref_fp = FieldParams { spp: a.cache.ref_spp, seed: a.cache.seed ^ 0x5EED, ..fp.clone() };
+    let (reference, ref_info) = reference_field(&scene, &ref_fp, &a.cache.ref_cache, a.cache.quiet)?;
+    let progress = Progress::new();
+    let mut points = Vec::new();
+    for method in [MethodArg::Ours, MethodArg::Jarosz08] {
+        for &k in &a.counts {
+            // Find ε for k records, then time a fresh placement at that ε.
+            let found = run_method(&scene, &fp, method, 0, &CacheArgs { caches: Some(k), ..a.cache.clone() }, &progress)?;
+            let mut run =
+                run_method(&scene, &fp, method, 0, &CacheArgs { caches: None, eps: found.eps, ..a.cache.clone() }, &progress)?;
+            run.errors = Some(field_errors(&run.field, &reference));
+            eprintln!("{method:?} {k:>5}: {} records, {:.2} s, RMSE {:.4e}", run.records, run.seconds_total, run.errors.unwrap().rmse);
+            points.push(Point { method, target: Some(k), spp: None, run });
+        }
+    }
+    for &spp in &a.spps {
+        let mut run = run_method(&scene, &fp, MethodArg::Pt, spp, &a.cache, &progress)?;
+        run.errors = Some(field_errors(&run.field, &reference));
+        eprintln!("Pt {spp:>5} spp: {:.2} s, RMSE {:.4e}", run.seconds_total, run.errors.unwrap().rmse);
+        points.push(Point { method: MethodArg::Pt, target: None, spp: Some(spp), run });
+    }
+    let report = Report {
+        scene: &scene.source,
+        params: &fp,
+        rays_per_cache: a.cache.rays,
+        per_part: a.cache.per_part,
+        reference: &ref_info,
+        points: &points,
+    };
+    let json = a.out.join(format!("tradeoff_{stem}.json"));
+    wrote(&json, write_json(&json, &report))?;
+    let png = a.out.join(format!("tradeoff_{stem}.png"));
+    wrote(&png, write_png(&png, &tradeoff_plot(&stem, &points)))?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn series(points: &[Point], method: MethodArg, x: impl Fn(&Point) -> f64) -> Vec<(f64, f64)> {
+    let mut v: Vec<(f64, f64)> =
+        points.iter().filter(|p| p.method == method).map(|p| (x(p), p.run.errors.map_or(f64::NAN, |e| e.rmse))).collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    v
+}
+
+fn tradeoff_plot(stem: &str, points: &[Point]) -> tiny_skia::Pixmap {
+    let mut pix = tiny_skia::Pixmap::new(1280, 480).expect("figure size");
+    pix.fill(tiny_skia::Color::WHITE);
+    let styled = |label: &str, color, pts| Series::new(label, color, pts).with_style(LineStyle::LineAndMarkers);
+    let mut by_time = Plot::new(Axis::log10("time (s)"), Axis::log10("RMSE (luminance)"));
+    by_time.title = Some(format!("{stem}: error vs time"));
+    by_time.series = vec![
+        styled("ours (aware, Hessian)", AWARE_PURPLE, series(points, MethodArg::Ours, |p| p.run.seconds_total)),
+        styled("Jarosz 2008 (unaware)", UNAWARE_ORANGE, series(points, MethodArg::Jarosz08, |p| p.run.seconds_total)),
+        styled("path tracing", REFERENCE_BLUE, series(points, MethodArg::Pt, |p| p.run.seconds_total)),
+    ];
+    by_time.legend = true;
+    let mut by_count = Plot::new(Axis::log10("records"), Axis::log10("RMSE (luminance)"));
+    by_count.title = Some(format!("{stem}: error vs cache count"));
+    by_count.series = vec![
+        styled("ours (aware, Hessian)", AWARE_PURPLE, series(points, MethodArg::Ours, |p| p.run.records as f64)),
+        styled("Jarosz 2008 (unaware)", UNAWARE_ORANGE, series(points, MethodArg::Jarosz08, |p| p.run.records as f64)),
+    ];
+    by_count.legend = true;
+    draw_plot_into(&mut pix, (0.0, 0.0, 640.0, 480.0), &by_time);
+    draw_plot_into(&mut pix, (640.0, 0.0, 640.0, 480.0), &by_count);
+    pix
+}
