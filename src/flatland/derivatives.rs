@@ -285,7 +285,6 @@ pub fn aware(lf: &LightField, elements: &[Element], settings: &AwareSettings) ->
 /// ∇s = −n/(n·ω). Medium samples sit at fixed fractions u of s, with thickness
 /// Δu·s. The measure and visibility are treated as constant. First order only.
 pub fn unaware(lf: &LightField) -> PartDerivs {
-    let x = lf.x;
     let hg = Hg2::new(lf.g);
     let dtheta = lf.ray_measure();
     let mut single = [Taylor2::<D2>::zero(); 3];
