@@ -1,0 +1,142 @@
+//! Radiance caching in 2D (theory.md §6–8): holes, determinism, and the paper's
+//! claims at equal cache count and equal cost.
+
+use glam::DVec2;
+use volcache::flatland::cached_field::{CacheMethod, CacheSettings, CachedField, RecordMemo, render_cached, render_with_count};
+use volcache::flatland::field::{Field, FieldParams, field_errors, render_field};
+use volcache::flatland::scene::Scene;
+use volcache::progress::Progress;
+
+fn load(path: &str) -> Scene {
+    Scene::load(std::path::Path::new(path)).unwrap()
+}
+
+fn params(scene: &Scene, w: usize, h: usize) -> FieldParams {
+    let mut fp = FieldParams::from_scene(scene);
+    (fp.width, fp.height) = (w, h);
+    fp
+}
+
+fn settings(method: CacheMethod, seed: u64) -> CacheSettings {
+    let mut cs = CacheSettings::new(method, 0.05);
+    cs.probe.rays = 512;
+    cs.probe.steps = 8;
+    cs.seed = seed;
+    cs
+}
+
+fn reference(scene: &Scene, fp: &FieldParams, spp: u32) -> Field {
+    render_field(scene, &FieldParams { spp, seed: 999, ..fp.clone() }, &Progress::new()).unwrap().field
+}
+
+fn at_count(scene: &Scene, fp: &FieldParams, method: CacheMethod, seed: u64, k: usize) -> CachedField {
+    render_with_count(scene, fp, &settings(method, seed), k, &mut RecordMemo::new(), &Progress::new()).unwrap().0
+}
+
+#[test]
+fn every_pixel_is_covered_and_results_do_not_depend_on_threads() {
+    let scene = load("flatland_scenes/windows.json");
+    let fp = params(&scene, 40, 28);
+    for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+        for per_part in [false, true] {
+            let cs = CacheSettings { per_part, ..settings(method, 3) };
+            let run = |threads| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| render_cached(&scene, &fp, &cs, &mut RecordMemo::new(), &Progress::new()).unwrap())
+            };
+            let (a, b) = (run(1), run(2));
+            assert_eq!(a.uncovered_pixels, 0, "{method:?} per_part={per_part}: holes");
+            assert!(a.record_count() > 0);
+            assert_eq!(a.field, b.field, "{method:?}: field differs between 1 and 2 threads");
+            assert_eq!(a.records, b.records);
+            assert!(a.field.values.iter().all(|v| v.is_finite() && v.min_element() >= 0.0));
+        }
+    }
+}
+
+#[test]
+fn equal_count_mode_hits_the_target() {
+    let scene = load("flatland_scenes/occluder.json");
+    let fp = params(&scene, 40, 40);
+    for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+        let f = at_count(&scene, &fp, method, 1, 60);
+        assert!((f.record_count() as f64 - 60.0).abs() <= 1.0, "{method:?}: {} records", f.record_count());
+    }
+}
+
+/// Distance from p to the line through a and b.
+fn line_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let d = (b - a).normalize();
+    (p - a).perp_dot(d).abs()
+}
+
+/// At equal cache count, ours has a lower RMSE than Jarosz et al. 2008 on both
+/// scenes for every seed (measured ratios ~0.27 on the occluder and ~0.67 on the
+/// windows, seed-to-seed spread ~0.05; bounds 0.5 and 0.85), and on the occluder it puts
+/// more records along the penumbra wedges (the lines through the emitter's and
+/// the occluder's ends).
+#[test]
+fn ours_beats_jarosz08_at_equal_count() {
+    for (path, (w, h), k) in [("flatland_scenes/occluder.json", (48, 48), 90), ("flatland_scenes/windows.json", (110, 72), 150)] {
+        let scene = load(path);
+        let fp = params(&scene, w, h);
+        let reference = reference(&scene, &fp, 2048);
+        let mut ratios = Vec::new();
+        for seed in 1..=3 {
+            let ours = at_count(&scene, &fp, CacheMethod::Ours, seed, k);
+            let theirs = at_count(&scene, &fp, CacheMethod::Jarosz08, seed, k);
+            let (eo, et) = (field_errors(&ours.field, &reference), field_errors(&theirs.field, &reference));
+            println!(
+                "{path} seed {seed}: ours {} records RMSE {:.4e}; jarosz08 {} records RMSE {:.4e}",
+                ours.record_count(),
+                eo.rmse,
+                theirs.record_count(),
+                et.rmse
+            );
+            ratios.push(eo.rmse / et.rmse);
+            if path.contains("occluder") {
+                let edges = [(-0.3, -0.35), (-0.3, 0.35), (0.3, -0.35), (0.3, 0.35)];
+                let band = |f: &CachedField| {
+                    let recs = &f.records[0];
+                    let near = recs
+                        .iter()
+                        .filter(|r| {
+                            r.position.y < 0.25
+                                && edges.iter().any(|&(e, o)| {
+                                    line_distance(r.position, DVec2::new(e, 0.75), DVec2::new(o, 0.25)) < 0.1
+                                })
+                        })
+                        .count();
+                    near as f64 / recs.len() as f64
+                };
+                let (bo, bt) = (band(&ours), band(&theirs));
+                println!("  records within 0.1 of a penumbra edge: ours {:.1}%, jarosz08 {:.1}%", 100.0 * bo, 100.0 * bt);
+                assert!(bo > 1.2 * bt, "ours {bo} vs jarosz08 {bt}");
+            }
+        }
+        let worst = ratios.iter().cloned().fold(0.0, f64::max);
+        let bound = if path.contains("occluder") { 0.5 } else { 0.85 };
+        assert!(worst < bound, "{path}: RMSE ratio ours/jarosz08 up to {worst}");
+    }
+}
+
+/// Both caches beat path tracing at equal cost on windows.json (cost measured in
+/// rays traced, which unlike seconds is deterministic).
+#[test]
+fn caches_beat_path_tracing_at_equal_rays() {
+    let scene = load("flatland_scenes/windows.json");
+    let fp = params(&scene, 110, 72);
+    let reference = reference(&scene, &fp, 2048);
+    for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+        let c = at_count(&scene, &fp, method, 1, 120);
+        let rays = c.placement_rays + c.reconstruction_rays;
+        // Path tracing spp with at least the cache's rays.
+        let probe = render_field(&scene, &FieldParams { spp: 1, ..fp.clone() }, &Progress::new()).unwrap();
+        let spp = ((rays as f64 / probe.rays as f64).ceil() as u32).max(1);
+        let pt = render_field(&scene, &FieldParams { spp, seed: 5, ..fp.clone() }, &Progress::new()).unwrap();
+        let (ec, ep) = (field_errors(&c.field, &reference), field_errors(&pt.field, &reference));
+        println!("{method:?}: {rays} rays RMSE {:.4e}; pt {spp} spp {} rays RMSE {:.4e}", ec.rmse, pt.rays, ep.rmse);
+        assert!(pt.rays >= rays);
+        assert!(ec.rmse < ep.rmse, "{method:?}: cache {} vs pt {}", ec.rmse, ep.rmse);
+    }
+}
