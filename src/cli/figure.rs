@@ -49,6 +49,9 @@ pub enum FigureCommand {
     /// The paper's gradient figure: ∇L_s by ours (aware), Jarosz 2008 (unaware) and
     /// finite differences (reference) on a grid and along a line, per scattering part.
     Gradients(GradientArgs),
+    /// Reference, ours and Jarosz 2008 side by side at equal cache count: fields, cache
+    /// distributions and error maps, with records, rays, time and RMSE in the captions.
+    Compare(super::figure_compare::CompareArgs),
 }
 
 /// A segment `X0,Y0,X1,Y1` in world units.
@@ -522,6 +525,7 @@ fn summarize(points: &[PointOut]) -> Summary {
 pub fn run(cmd: FigureCommand) -> anyhow::Result<ExitCode> {
     match cmd {
         FigureCommand::Gradients(a) => gradients(a),
+        FigureCommand::Compare(a) => super::figure_compare::run(a),
     }
 }
 

@@ -11,12 +11,18 @@
 //! - [`gradient_figure`](mod@gradient_figure): the paper's gradient figure (panels per
 //!   method) and the gradient's profile along a line.
 //! - [`axis`], [`plot`]: line plots (linear or log axes, legends), alone or stacked.
+//! - [`records`]: cache records drawn as their extents (the point-distribution
+//!   insets), alone or over the scene and a dimmed field.
+//! - [`error_map`]: per-pixel error against a reference in false colour.
+//! - [`compose`]: finished figures composed into captioned rows.
 //!
 //! Files are written by [`crate::output`] (atomic PNG/EXR/JSON writers).
 
 pub mod axis;
 pub mod colorbar;
 pub mod colormap;
+pub mod compose;
+pub mod error_map;
 pub mod field_figure;
 pub mod gradient_color;
 pub mod gradient_figure;
@@ -24,10 +30,15 @@ pub mod overlay;
 pub mod panel;
 pub mod plot;
 mod plot_series;
+pub mod records;
+#[cfg(test)]
+mod synthetic;
 pub mod text;
 
 pub use colorbar::{ColorScale, Tick, colorbar_width, draw_colorbar};
 pub use colormap::{angle_color, srgb_encode, tonemap, viridis};
+pub use compose::{Cell, compose_grid};
+pub use error_map::{error_field, error_map_figure, shared_error_range};
 pub use field_figure::{
     FieldStyle, FigureOptions, INVALID_RGB, MappedField, NAN_RGB, field_color_scale, field_figure, field_figure_with,
     field_to_rgba, upscale_factor,
@@ -44,4 +55,5 @@ pub use panel::{Canvas, View};
 pub use plot::{
     Axis, AxisMap, AxisTick, LineStyle, Plot, PlotLayout, Scale, Series, draw_plot, draw_plot_into, draw_plots_stacked,
 };
+pub use records::{RECORD_BLUE, RecordColor, RecordStyle, draw_records, record_color_scale, records_figure};
 pub use text::{HAlign, VAlign, draw_text, draw_text_aligned, draw_text_vertical, text_metrics, text_width};
