@@ -58,12 +58,6 @@ fn aware_recovers_the_subtended_angle_of_an_emitter() {
     }
 }
 
-/// Angle between two gradients (radians) and relative magnitude error.
-fn grad_errors(got: DVec2, want: DVec2) -> (f64, f64) {
-    let angle = got.angle_to(want).abs();
-    (angle, (got.length() - want.length()).abs() / want.length().max(1e-300))
-}
-
 fn frobenius(m: DMat2) -> f64 {
     (m.x_axis.length_squared() + m.y_axis.length_squared()).sqrt()
 }

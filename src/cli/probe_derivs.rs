@@ -69,6 +69,7 @@ pub struct DerivOut {
 }
 
 /// Run one derivative method at a point.
+#[allow(clippy::too_many_arguments)] // each setting block is its own type
 pub fn compute(
     scene: &volcache::flatland::scene::Scene,
     x: DVec2,

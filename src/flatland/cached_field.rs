@@ -273,11 +273,10 @@ pub fn render_cached(
         if uncovered.is_empty() {
             continue;
         }
-        if !memo.contains_key(&k) {
-            let d = compute_record(scene, x, omega_o, cs, k)?;
-            memo.insert(k, d);
-        }
-        let d = &memo[&k];
+        let d = match memo.entry(k) {
+            std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+            std::collections::hash_map::Entry::Vacant(e) => e.insert(compute_record(scene, x, omega_o, cs, k)?),
+        };
         placement_rays += d.rays;
         for c in uncovered {
             let q = quantities[c];
@@ -292,7 +291,9 @@ pub fn render_cached(
 
     let t1 = std::time::Instant::now();
     let second_order = cs.second_order && cs.method == CacheMethod::Ours;
-    let rows: Vec<(Vec<(Rgb, bool, bool)>, u64)> = (0..h)
+    // Per pixel (value, inside the medium, covered by a record), and rays per row.
+    type Row = (Vec<(Rgb, bool, bool)>, u64);
+    let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|j| {
             let mut rays = 0;
@@ -357,7 +358,7 @@ pub fn render_with_count(
     progress: &Progress,
 ) -> Result<(CachedField, f64), Cancelled> {
     let tol = (target as f64 * 0.01).max(1.0);
-    let mut try_eps = |eps: f64, memo: &mut RecordMemo| {
+    let try_eps = |eps: f64, memo: &mut RecordMemo| {
         let c = CacheSettings { eps, ..cs.clone() };
         render_cached(scene, fp, &c, memo, progress).map(|f| (f.record_count(), f))
     };

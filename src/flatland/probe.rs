@@ -146,7 +146,7 @@ pub fn capture(
             let dir = DVec2::from_angle(theta);
             let mut rays = 1u64;
             let hit = scene.geometry.closest_hit(x, dir, f64::INFINITY, None);
-            let hit_record = hit.and_then(|h| {
+            let hit_record = hit.map(|h| {
                 let seg = &scene.geometry.segments[h.segment as usize];
                 let (normal, active) = seg.facing_dir(dir);
                 let point = seg.point_at(h.u);
@@ -158,12 +158,12 @@ pub fn capture(
                     }
                     l += sum / ps.paths.max(1) as f64;
                 }
-                Some(SurfaceHit {
+                SurfaceHit {
                     point,
                     segment: h.segment,
                     normal,
                     radiance: l,
-                })
+                }
             });
             let length = hit.map_or(t_cut, |h| h.t);
             let mut samples = Vec::new();
