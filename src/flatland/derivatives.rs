@@ -236,6 +236,13 @@ pub fn direct_derivatives(lf: &LightField) -> TaylorRgb<D2> {
 
 /// One proxy element's contribution σ_s f T L F with its derivatives.
 pub fn element_contribution(lf: &LightField, e: &Element, medium_clamp: f64) -> TaylorRgb<D2> {
+    let soft = near_distance((e.b - e.a).length());
+    let phase = phase_taylor::<D2>(lf.g, lf.x, e.anchor, lf.omega_o, soft);
+    element_incident(lf, e, medium_clamp).mul_channels([phase * lf.sigma_s.x, phase * lf.sigma_s.y, phase * lf.sigma_s.z])
+}
+
+/// The light an element sends to x, T L F (no phase, no σ_s), with derivatives.
+pub fn element_incident(lf: &LightField, e: &Element, medium_clamp: f64) -> TaylorRgb<D2> {
     let x = lf.x;
     let size = (e.b - e.a).length();
     let soft = near_distance(size);
@@ -259,8 +266,55 @@ pub fn element_contribution(lf: &LightField, e: &Element, medium_clamp: f64) -> 
             medium_form_factor_smoothed::<D2>(e.anchor, width * lf.step, x, medium_clamp * lf.step) * (1.0 / lf.step)
         }
     };
-    let geo = phase_taylor::<D2>(lf.g, x, e.anchor, lf.omega_o, soft) * form;
-    TaylorRgb::tint(geo, e.radiance * lf.sigma_s).mul_channels(transmittance3(lf.sigma_t, x, e.anchor, soft))
+    TaylorRgb::tint(form, e.radiance).mul_channels(transmittance3(lf.sigma_t, x, e.anchor, soft))
+}
+
+/// Circular-harmonic moments of the incident light, per cached part, each with its
+/// derivatives (theory.md §1): M_k = Σ_j (T L F)_j (cos kθ_j, sin kθ_j), k = 0..=K.
+/// An anisotropic medium caches these and evaluates L_s for any ω_o with
+/// [`Moments::in_scattered`]; an isotropic one needs K = 0 only.
+#[derive(Clone, Debug)]
+pub struct Moments {
+    pub single: Vec<[TaylorRgb<D2>; 2]>,
+    pub multiple: Vec<[TaylorRgb<D2>; 2]>,
+    pub g: f64,
+    pub sigma_s: Rgb,
+}
+
+impl Moments {
+    /// Single and multiple scattering towards `omega_o` (σ_s f ∗ moments).
+    pub fn in_scattered(&self, omega_o: DVec2) -> (TaylorRgb<D2>, TaylorRgb<D2>) {
+        let eval = |m: &[[TaylorRgb<D2>; 2]]| {
+            let ch = |c: usize| {
+                let per: Vec<[Taylor2<D2>; 2]> = m.iter().map(|k| [k[0].channels[c], k[1].channels[c]]).collect();
+                crate::core::harmonics::hg2_in_scatter(self.g, &per, omega_o) * self.sigma_s[c]
+            };
+            TaylorRgb { channels: [ch(0), ch(1), ch(2)] }
+        };
+        (eval(&self.single), eval(&self.multiple))
+    }
+}
+
+/// The moments of order 0..=`order` (forced to 0 for isotropic media: they pay nothing).
+pub fn aware_moments(lf: &LightField, elements: &[Element], settings: &AwareSettings, order: usize) -> Moments {
+    let order = if lf.g == 0.0 { 0 } else { order };
+    let zero = [TaylorRgb::default(); 2];
+    let (mut single, mut multiple) = (vec![zero; order + 1], vec![zero; order + 1]);
+    let mut basis = vec![[Taylor2::<D2>::zero(); 2]; order + 1];
+    for e in elements {
+        let incident = element_incident(lf, e, settings.medium_clamp);
+        let soft = near_distance((e.b - e.a).length());
+        crate::core::harmonics::circular_harmonics(lf.x, e.anchor, soft, &mut basis);
+        let target = match e.kind {
+            ElementKind::Surface => &mut single,
+            ElementKind::Medium => &mut multiple,
+        };
+        for (m, b) in target.iter_mut().zip(&basis) {
+            m[0] += incident.mul_channels([b[0]; 3]);
+            m[1] += incident.mul_channels([b[1]; 3]);
+        }
+    }
+    Moments { single, multiple, g: lf.g, sigma_s: lf.sigma_s }
 }
 
 /// Ours: value, gradient and Hessian of L_s from the proxy elements.
