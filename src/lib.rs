@@ -9,9 +9,14 @@
 //!   radiance fields.
 //! - [`figure`]: drawing of data it is handed (tiny-skia), PNG/EXR/JSON writers.
 //! - [`progress`]: the progress/cancel handle every long-running entry point takes.
+//! - [`volume`]: the 3D renderer: scenes, f64 BVH, reference volumetric path tracer.
+//! - [`app`]: the interactive workbench (egui/eframe); UI only, it calls the same
+//!   functions as the command line.
 
+pub mod app;
 pub mod core;
 pub mod figure;
 pub mod flatland;
 pub mod output;
 pub mod progress;
+pub mod volume;

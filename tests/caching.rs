@@ -2,7 +2,9 @@
 //! claims at equal cache count and equal cost.
 
 use glam::DVec2;
-use volcache::flatland::cached_field::{CacheMethod, CacheSettings, CachedField, RecordMemo, render_cached, render_with_count};
+use volcache::flatland::cached_field::{
+    CacheMethod, CacheSettings, CachedField, RecordMemo, render_cached, render_with_count,
+};
 use volcache::flatland::field::{Field, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
 use volcache::progress::Progress;
@@ -26,11 +28,30 @@ fn settings(method: CacheMethod, seed: u64) -> CacheSettings {
 }
 
 fn reference(scene: &Scene, fp: &FieldParams, spp: u32) -> Field {
-    render_field(scene, &FieldParams { spp, seed: 999, ..fp.clone() }, &Progress::new()).unwrap().field
+    render_field(
+        scene,
+        &FieldParams {
+            spp,
+            seed: 999,
+            ..fp.clone()
+        },
+        &Progress::new(),
+    )
+    .unwrap()
+    .field
 }
 
 fn at_count(scene: &Scene, fp: &FieldParams, method: CacheMethod, seed: u64, k: usize) -> CachedField {
-    render_with_count(scene, fp, &settings(method, seed), k, &mut RecordMemo::new(), &Progress::new()).unwrap().0
+    render_with_count(
+        scene,
+        fp,
+        &settings(method, seed),
+        k,
+        &mut RecordMemo::new(),
+        &Progress::new(),
+    )
+    .unwrap()
+    .0
 }
 
 #[test]
@@ -39,7 +60,10 @@ fn every_pixel_is_covered_and_results_do_not_depend_on_threads() {
     let fp = params(&scene, 40, 28);
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
         for per_part in [false, true] {
-            let cs = CacheSettings { per_part, ..settings(method, 3) };
+            let cs = CacheSettings {
+                per_part,
+                ..settings(method, 3)
+            };
             let run = |threads| {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 pool.install(|| render_cached(&scene, &fp, &cs, &mut RecordMemo::new(), &Progress::new()).unwrap())
@@ -60,7 +84,11 @@ fn equal_count_mode_hits_the_target() {
     let fp = params(&scene, 40, 40);
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
         let f = at_count(&scene, &fp, method, 1, 60);
-        assert!((f.record_count() as f64 - 60.0).abs() <= 1.0, "{method:?}: {} records", f.record_count());
+        assert!(
+            (f.record_count() as f64 - 60.0).abs() <= 1.0,
+            "{method:?}: {} records",
+            f.record_count()
+        );
     }
 }
 
@@ -77,7 +105,10 @@ fn line_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
 /// the occluder's ends).
 #[test]
 fn ours_beats_jarosz08_at_equal_count() {
-    for (path, (w, h), k) in [("flatland_scenes/occluder.json", (48, 48), 90), ("flatland_scenes/windows.json", (110, 72), 150)] {
+    for (path, (w, h), k) in [
+        ("flatland_scenes/occluder.json", (48, 48), 90),
+        ("flatland_scenes/windows.json", (110, 72), 150),
+    ] {
         let scene = load(path);
         let fp = params(&scene, w, h);
         let reference = reference(&scene, &fp, 2048);
@@ -85,7 +116,10 @@ fn ours_beats_jarosz08_at_equal_count() {
         for seed in 1..=3 {
             let ours = at_count(&scene, &fp, CacheMethod::Ours, seed, k);
             let theirs = at_count(&scene, &fp, CacheMethod::Jarosz08, seed, k);
-            let (eo, et) = (field_errors(&ours.field, &reference), field_errors(&theirs.field, &reference));
+            let (eo, et) = (
+                field_errors(&ours.field, &reference),
+                field_errors(&theirs.field, &reference),
+            );
             println!(
                 "{path} seed {seed}: ours {} records RMSE {:.4e}; jarosz08 {} records RMSE {:.4e}",
                 ours.record_count(),
@@ -110,7 +144,11 @@ fn ours_beats_jarosz08_at_equal_count() {
                     near as f64 / recs.len() as f64
                 };
                 let (bo, bt) = (band(&ours), band(&theirs));
-                println!("  records within 0.1 of a penumbra edge: ours {:.1}%, jarosz08 {:.1}%", 100.0 * bo, 100.0 * bt);
+                println!(
+                    "  records within 0.1 of a penumbra edge: ours {:.1}%, jarosz08 {:.1}%",
+                    100.0 * bo,
+                    100.0 * bt
+                );
                 assert!(bo > 1.2 * bt, "ours {bo} vs jarosz08 {bt}");
             }
         }
@@ -133,9 +171,21 @@ fn caches_beat_path_tracing_at_equal_rays() {
         // Path tracing spp with at least the cache's rays.
         let probe = render_field(&scene, &FieldParams { spp: 1, ..fp.clone() }, &Progress::new()).unwrap();
         let spp = ((rays as f64 / probe.rays as f64).ceil() as u32).max(1);
-        let pt = render_field(&scene, &FieldParams { spp, seed: 5, ..fp.clone() }, &Progress::new()).unwrap();
+        let pt = render_field(
+            &scene,
+            &FieldParams {
+                spp,
+                seed: 5,
+                ..fp.clone()
+            },
+            &Progress::new(),
+        )
+        .unwrap();
         let (ec, ep) = (field_errors(&c.field, &reference), field_errors(&pt.field, &reference));
-        println!("{method:?}: {rays} rays RMSE {:.4e}; pt {spp} spp {} rays RMSE {:.4e}", ec.rmse, pt.rays, ep.rmse);
+        println!(
+            "{method:?}: {rays} rays RMSE {:.4e}; pt {spp} spp {} rays RMSE {:.4e}",
+            ec.rmse, pt.rays, ep.rmse
+        );
         assert!(pt.rays >= rays);
         assert!(ec.rmse < ep.rmse, "{method:?}: cache {} vs pt {}", ec.rmse, ep.rmse);
     }

@@ -13,14 +13,20 @@ use volcache::flatland::scene::Scene;
 use volcache::progress::Progress;
 
 fn aware_at(scene: &Scene, x: DVec2, rays: usize, seed: u64) -> PartDerivs {
-    let ps = ProbeSettings { rays, ..Default::default() };
+    let ps = ProbeSettings {
+        rays,
+        ..Default::default()
+    };
     let lf = capture(scene, x, DVec2::X, &ps, seed, 0, &Progress::new()).unwrap();
     let aw = AwareSettings::default();
     derivatives::aware(&lf, &proxy::build(&lf, aw.rule), &aw)
 }
 
 fn unaware_at(scene: &Scene, x: DVec2, rays: usize, seed: u64) -> PartDerivs {
-    let ps = ProbeSettings { rays, ..Default::default() };
+    let ps = ProbeSettings {
+        rays,
+        ..Default::default()
+    };
     let lf = capture(scene, x, DVec2::X, &ps, seed, 0, &Progress::new()).unwrap();
     derivatives::unaware(&lf)
 }
@@ -47,14 +53,35 @@ fn aware_recovers_the_subtended_angle_of_an_emitter() {
         let rel = |a: f64, b: f64, s: f64| (a - b).abs() / s;
         let gscale = exact.grad.length();
         let hscale = (exact.hess.x_axis.length() + exact.hess.y_axis.length()).max(1e-300);
-        println!("x={x}: value {} vs {}, grad {} vs {}", got.value, exact.value, got.grad, exact.grad);
+        println!(
+            "x={x}: value {} vs {}, grad {} vs {}",
+            got.value, exact.value, got.grad, exact.grad
+        );
         // One ray spacing at each end of the emitter: a few 1e-3 at 8192 rays.
-        assert!(rel(got.value, exact.value, exact.value) < 5e-3, "{} vs {}", got.value, exact.value);
-        assert!((got.grad - exact.grad).length() / gscale < 0.02, "grad {} vs {}", got.grad, exact.grad);
+        assert!(
+            rel(got.value, exact.value, exact.value) < 5e-3,
+            "{} vs {}",
+            got.value,
+            exact.value
+        );
+        assert!(
+            (got.grad - exact.grad).length() / gscale < 0.02,
+            "grad {} vs {}",
+            got.grad,
+            exact.grad
+        );
         let dh = got.hess - exact.hess;
-        assert!((dh.x_axis.length() + dh.y_axis.length()) / hscale < 0.05, "hess {:?} vs {:?}", got.hess, exact.hess);
+        assert!(
+            (dh.x_axis.length() + dh.y_axis.length()) / hscale < 0.05,
+            "hess {:?} vs {:?}",
+            got.hess,
+            exact.hess
+        );
         let un = unaware_at(&scene, x, 8192, 3).single.luminance();
-        assert!((un.grad - exact.grad).length() / gscale > 0.9, "unaware should miss the form-factor change");
+        assert!(
+            (un.grad - exact.grad).length() / gscale > 0.9,
+            "unaware should miss the form-factor change"
+        );
     }
 }
 
@@ -76,10 +103,33 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
 #[test]
 fn aware_beats_unaware_near_occlusion_boundaries() {
     let cases = [
-        ("flatland_scenes/occluder.json", vec![(0.45, 0.0), (-0.45, 0.0), (0.5, -0.3), (-0.55, -0.4), (0.42, 0.1), (0.6, 0.2)]),
-        ("flatland_scenes/windows.json", vec![(0.8, 0.45), (1.2, 0.75), (0.5, 0.15), (-1.9, 0.6), (-1.85, 1.2), (0.85, 2.4)]),
+        (
+            "flatland_scenes/occluder.json",
+            vec![
+                (0.45, 0.0),
+                (-0.45, 0.0),
+                (0.5, -0.3),
+                (-0.55, -0.4),
+                (0.42, 0.1),
+                (0.6, 0.2),
+            ],
+        ),
+        (
+            "flatland_scenes/windows.json",
+            vec![
+                (0.8, 0.45),
+                (1.2, 0.75),
+                (0.5, 0.15),
+                (-1.9, 0.6),
+                (-1.85, 1.2),
+                (0.85, 2.4),
+            ],
+        ),
     ];
-    let rs = ReferenceSettings { spp: 40_000, relative_step: 1e-2 };
+    let rs = ReferenceSettings {
+        spp: 40_000,
+        relative_step: 1e-2,
+    };
     let (mut aware_err, mut unaware_err, mut hess_err, mut multi_err) = (vec![], vec![], vec![], vec![]);
     for (path, points) in cases {
         let scene = Scene::load(std::path::Path::new(path)).unwrap();
@@ -87,7 +137,11 @@ fn aware_beats_unaware_near_occlusion_boundaries() {
             let x = DVec2::new(x, y);
             let reference = derivatives::reference(&scene, x, DVec2::X, &rs, &Default::default(), 11).parts;
             let (aw, un) = (aware_at(&scene, x, 4096, 5), unaware_at(&scene, x, 4096, 5));
-            let (r, a, u) = (reference.single.luminance(), aw.single.luminance(), un.single.luminance());
+            let (r, a, u) = (
+                reference.single.luminance(),
+                aw.single.luminance(),
+                un.single.luminance(),
+            );
             let rel = |g: DVec2, want: DVec2| (g - want).length() / want.length();
             let h = frobenius(a.hess - r.hess) / frobenius(r.hess);
             let (rm, am) = (reference.multiple.luminance(), aw.multiple.luminance());
@@ -123,13 +177,19 @@ fn aware_beats_unaware_near_occlusion_boundaries() {
 #[test]
 fn aware_error_shrinks_with_more_rays() {
     let scene = Scene::load(std::path::Path::new("flatland_scenes/occluder.json")).unwrap();
-    let rs = ReferenceSettings { spp: 40_000, relative_step: 1e-2 };
+    let rs = ReferenceSettings {
+        spp: 40_000,
+        relative_step: 1e-2,
+    };
     let points = [DVec2::new(0.45, 0.0), DVec2::new(-0.5, -0.3), DVec2::new(0.6, 0.2)];
     let err = |rays: usize| -> f64 {
         points
             .iter()
             .map(|&x| {
-                let r = derivatives::reference(&scene, x, DVec2::X, &rs, &Default::default(), 2).parts.single.luminance();
+                let r = derivatives::reference(&scene, x, DVec2::X, &rs, &Default::default(), 2)
+                    .parts
+                    .single
+                    .luminance();
                 let errs: f64 = (0..4)
                     .map(|seed| {
                         let a = aware_at(&scene, x, rays, seed).single.luminance();
@@ -191,7 +251,12 @@ fn derivatives_are_finite_at_extremes() {
         )
         .unwrap();
         // On a segment, a hair's breadth from an endpoint, on the point light.
-        for x in [DVec2::new(0.1, 0.0), DVec2::new(0.3 + 1e-9, 1e-9), DVec2::new(0.0, -0.5), DVec2::new(0.0, 0.4999999)] {
+        for x in [
+            DVec2::new(0.1, 0.0),
+            DVec2::new(0.3 + 1e-9, 1e-9),
+            DVec2::new(0.0, -0.5),
+            DVec2::new(0.0, 0.4999999),
+        ] {
             let a = aware_at(&scene, x, 256, 1);
             let u = unaware_at(&scene, x, 256, 1);
             assert!(a.is_finite() && u.is_finite(), "g={g} σ={sig} x={x}: {a:?}");
@@ -204,27 +269,57 @@ fn derivatives_are_finite_at_extremes() {
 /// isotropic medium uses only the zeroth moment.
 #[test]
 fn harmonic_moments_reproduce_the_anisotropic_phase() {
-    let text = std::fs::read_to_string("flatland_scenes/occluder.json").unwrap().replace(r#""g": 0.0"#, r#""g": 0.5"#);
+    let text = std::fs::read_to_string("flatland_scenes/occluder.json")
+        .unwrap()
+        .replace(r#""g": 0.0"#, r#""g": 0.5"#);
     let scene = Scene::from_json(&text, "occluder g=0.5").unwrap();
     let x = DVec2::new(0.45, 0.0);
     let aw = AwareSettings::default();
     for angle in [0.0f64, 1.0, 2.5, -2.0] {
         let omega_o = DVec2::from_angle(angle);
-        let ps = ProbeSettings { rays: 1024, ..Default::default() };
+        let ps = ProbeSettings {
+            rays: 1024,
+            ..Default::default()
+        };
         let lf = capture(&scene, x, omega_o, &ps, 3, 0, &Progress::new()).unwrap();
         let elements = proxy::build(&lf, aw.rule);
         let direct = derivatives::aware(&lf, &elements, &aw);
         let moments = derivatives::aware_moments(&lf, &elements, &aw, 60);
         let (single, multiple) = moments.in_scattered(omega_o);
-        for (a, b) in [(single.luminance(), direct.single.luminance()), (multiple.luminance(), direct.multiple.luminance())] {
+        for (a, b) in [
+            (single.luminance(), direct.single.luminance()),
+            (multiple.luminance(), direct.multiple.luminance()),
+        ] {
             // Agreement up to the two softenings near elements (relative ε²/r²).
-            assert!((a.value - b.value).abs() < 1e-4 * b.value.abs(), "ω_o {angle}: {} vs {}", a.value, b.value);
-            assert!((a.grad - b.grad).length() < 1e-3 * b.grad.length().max(1e-12), "{} vs {}", a.grad, b.grad);
+            assert!(
+                (a.value - b.value).abs() < 1e-4 * b.value.abs(),
+                "ω_o {angle}: {} vs {}",
+                a.value,
+                b.value
+            );
+            assert!(
+                (a.grad - b.grad).length() < 1e-3 * b.grad.length().max(1e-12),
+                "{} vs {}",
+                a.grad,
+                b.grad
+            );
             assert!(frobenius(a.hess - b.hess) < 1e-2 * frobenius(b.hess).max(1e-12));
         }
     }
     let iso = Scene::load(std::path::Path::new("flatland_scenes/occluder.json")).unwrap();
-    let lf = capture(&iso, x, DVec2::X, &ProbeSettings { rays: 256, ..Default::default() }, 3, 0, &Progress::new()).unwrap();
+    let lf = capture(
+        &iso,
+        x,
+        DVec2::X,
+        &ProbeSettings {
+            rays: 256,
+            ..Default::default()
+        },
+        3,
+        0,
+        &Progress::new(),
+    )
+    .unwrap();
     let m = derivatives::aware_moments(&lf, &proxy::build(&lf, aw.rule), &aw, 60);
     assert_eq!(m.single.len(), 1, "isotropic media keep only M_0");
 }

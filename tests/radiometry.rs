@@ -233,7 +233,15 @@ fn thin_unbounded_fog_terminates_paths() {
         "segments": [{"a": [-0.5, 0.9], "b": [0.5, 0.9], "emission": 1}],
         "medium": {"sigma_a": 0, "sigma_s": 1e-6} }"#,
     );
-    let e = estimate(&s, DVec2::ZERO, &Query::InScattered { omega_o: DVec2::X }, &Settings::default(), 1000, 0, 0);
+    let e = estimate(
+        &s,
+        DVec2::ZERO,
+        &Query::InScattered { omega_o: DVec2::X },
+        &Settings::default(),
+        1000,
+        0,
+        0,
+    );
     assert!(e.rays < 10 * 1000, "{} rays for 1000 samples", e.rays);
     assert!(e.mean.total().x > 0.0 && e.mean.total().x.is_finite());
 }

@@ -56,26 +56,69 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
-    let ref_fp = FieldParams { spp: a.cache.ref_spp, seed: a.cache.seed ^ 0x5EED, ..fp.clone() };
+    let ref_fp = FieldParams {
+        spp: a.cache.ref_spp,
+        seed: a.cache.seed ^ 0x5EED,
+        ..fp.clone()
+    };
     let (reference, ref_info) = reference_field(&scene, &ref_fp, &a.cache.ref_cache, a.cache.quiet)?;
     let progress = Progress::new();
     let mut points = Vec::new();
     for method in [MethodArg::Ours, MethodArg::Jarosz08] {
         for &k in &a.counts {
             // Find ε for k records, then time a fresh placement at that ε.
-            let found = run_method(&scene, &fp, method, 0, &CacheArgs { caches: Some(k), ..a.cache.clone() }, &progress)?;
-            let mut run =
-                run_method(&scene, &fp, method, 0, &CacheArgs { caches: None, eps: found.eps, ..a.cache.clone() }, &progress)?;
+            let found = run_method(
+                &scene,
+                &fp,
+                method,
+                0,
+                &CacheArgs {
+                    caches: Some(k),
+                    ..a.cache.clone()
+                },
+                &progress,
+            )?;
+            let mut run = run_method(
+                &scene,
+                &fp,
+                method,
+                0,
+                &CacheArgs {
+                    caches: None,
+                    eps: found.eps,
+                    ..a.cache.clone()
+                },
+                &progress,
+            )?;
             run.errors = Some(field_errors(&run.field, &reference));
-            eprintln!("{method:?} {k:>5}: {} records, {:.2} s, RMSE {:.4e}", run.records, run.seconds_total, run.errors.unwrap().rmse);
-            points.push(Point { method, target: Some(k), spp: None, run });
+            eprintln!(
+                "{method:?} {k:>5}: {} records, {:.2} s, RMSE {:.4e}",
+                run.records,
+                run.seconds_total,
+                run.errors.unwrap().rmse
+            );
+            points.push(Point {
+                method,
+                target: Some(k),
+                spp: None,
+                run,
+            });
         }
     }
     for &spp in &a.spps {
         let mut run = run_method(&scene, &fp, MethodArg::Pt, spp, &a.cache, &progress)?;
         run.errors = Some(field_errors(&run.field, &reference));
-        eprintln!("Pt {spp:>5} spp: {:.2} s, RMSE {:.4e}", run.seconds_total, run.errors.unwrap().rmse);
-        points.push(Point { method: MethodArg::Pt, target: None, spp: Some(spp), run });
+        eprintln!(
+            "Pt {spp:>5} spp: {:.2} s, RMSE {:.4e}",
+            run.seconds_total,
+            run.errors.unwrap().rmse
+        );
+        points.push(Point {
+            method: MethodArg::Pt,
+            target: None,
+            spp: Some(spp),
+            run,
+        });
     }
     let report = Report {
         scene: &scene.source,
@@ -93,8 +136,11 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn series(points: &[Point], method: MethodArg, x: impl Fn(&Point) -> f64) -> Vec<(f64, f64)> {
-    let mut v: Vec<(f64, f64)> =
-        points.iter().filter(|p| p.method == method).map(|p| (x(p), p.run.errors.map_or(f64::NAN, |e| e.rmse))).collect();
+    let mut v: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.method == method)
+        .map(|p| (x(p), p.run.errors.map_or(f64::NAN, |e| e.rmse)))
+        .collect();
     v.sort_by(|a, b| a.0.total_cmp(&b.0));
     v
 }
@@ -106,16 +152,36 @@ fn tradeoff_plot(stem: &str, points: &[Point]) -> tiny_skia::Pixmap {
     let mut by_time = Plot::new(Axis::log10("time (s)"), Axis::log10("RMSE (luminance)"));
     by_time.title = Some(format!("{stem}: error vs time"));
     by_time.series = vec![
-        styled("ours (aware, Hessian)", AWARE_PURPLE, series(points, MethodArg::Ours, |p| p.run.seconds_total)),
-        styled("Jarosz 2008 (unaware)", UNAWARE_ORANGE, series(points, MethodArg::Jarosz08, |p| p.run.seconds_total)),
-        styled("path tracing", REFERENCE_BLUE, series(points, MethodArg::Pt, |p| p.run.seconds_total)),
+        styled(
+            "ours (aware, Hessian)",
+            AWARE_PURPLE,
+            series(points, MethodArg::Ours, |p| p.run.seconds_total),
+        ),
+        styled(
+            "Jarosz 2008 (unaware)",
+            UNAWARE_ORANGE,
+            series(points, MethodArg::Jarosz08, |p| p.run.seconds_total),
+        ),
+        styled(
+            "path tracing",
+            REFERENCE_BLUE,
+            series(points, MethodArg::Pt, |p| p.run.seconds_total),
+        ),
     ];
     by_time.legend = true;
     let mut by_count = Plot::new(Axis::log10("records"), Axis::log10("RMSE (luminance)"));
     by_count.title = Some(format!("{stem}: error vs cache count"));
     by_count.series = vec![
-        styled("ours (aware, Hessian)", AWARE_PURPLE, series(points, MethodArg::Ours, |p| p.run.records as f64)),
-        styled("Jarosz 2008 (unaware)", UNAWARE_ORANGE, series(points, MethodArg::Jarosz08, |p| p.run.records as f64)),
+        styled(
+            "ours (aware, Hessian)",
+            AWARE_PURPLE,
+            series(points, MethodArg::Ours, |p| p.run.records as f64),
+        ),
+        styled(
+            "Jarosz 2008 (unaware)",
+            UNAWARE_ORANGE,
+            series(points, MethodArg::Jarosz08, |p| p.run.records as f64),
+        ),
     ];
     by_count.legend = true;
     draw_plot_into(&mut pix, (0.0, 0.0, 640.0, 480.0), &by_time);

@@ -8,7 +8,9 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use volcache::figure::{FieldStyle, field_figure};
-use volcache::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached, render_with_count};
+use volcache::flatland::cached_field::{
+    CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached, render_with_count,
+};
 use volcache::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
 use volcache::output::{write_exr, write_json, write_png};
@@ -116,7 +118,14 @@ pub fn cache_settings(method: CacheMethod, a: &CacheArgs) -> CacheSettings {
 }
 
 /// Run one method (a fresh memo: times are honest).
-pub fn run_method(scene: &Scene, fp: &FieldParams, method: MethodArg, spp: u32, a: &CacheArgs, progress: &Progress) -> anyhow::Result<MethodRun> {
+pub fn run_method(
+    scene: &Scene,
+    fp: &FieldParams,
+    method: MethodArg,
+    spp: u32,
+    a: &CacheArgs,
+    progress: &Progress,
+) -> anyhow::Result<MethodRun> {
     let cancelled = |_| anyhow::anyhow!("cancelled");
     Ok(match method {
         MethodArg::Pt => {
@@ -137,17 +146,31 @@ pub fn run_method(scene: &Scene, fp: &FieldParams, method: MethodArg, spp: u32, 
             }
         }
         MethodArg::Ours | MethodArg::Jarosz08 => {
-            let m = if method == MethodArg::Ours { CacheMethod::Ours } else { CacheMethod::Jarosz08 };
+            let m = if method == MethodArg::Ours {
+                CacheMethod::Ours
+            } else {
+                CacheMethod::Jarosz08
+            };
             let cs = cache_settings(m, a);
             let mut memo = RecordMemo::new();
             let eps = match a.caches {
-                Some(k) => render_with_count(scene, fp, &cs, k.max(1), &mut memo, progress).map_err(cancelled)?.1,
+                Some(k) => {
+                    render_with_count(scene, fp, &cs, k.max(1), &mut memo, progress)
+                        .map_err(cancelled)?
+                        .1
+                }
                 None => cs.eps,
             };
             // Time a fresh placement at the chosen ε (the search's memo would hide its cost).
             let start = std::time::Instant::now();
-            let f = render_cached(scene, fp, &CacheSettings { eps, ..cs }, &mut RecordMemo::new(), progress)
-                .map_err(cancelled)?;
+            let f = render_cached(
+                scene,
+                fp,
+                &CacheSettings { eps, ..cs },
+                &mut RecordMemo::new(),
+                progress,
+            )
+            .map_err(cancelled)?;
             let seconds_total = start.elapsed().as_secs_f64();
             MethodRun {
                 method,
@@ -183,7 +206,11 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
-    let ref_fp = FieldParams { spp: a.cache.ref_spp, seed: a.cache.seed ^ 0x5EED, ..fp.clone() };
+    let ref_fp = FieldParams {
+        spp: a.cache.ref_spp,
+        seed: a.cache.seed ^ 0x5EED,
+        ..fp.clone()
+    };
     let (reference, ref_info) = reference_field(&scene, &ref_fp, &a.cache.ref_cache, a.cache.quiet)?;
     let ui = ProgressUi::new(&format!("{stem} {:?}", a.method), !a.cache.quiet);
     let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &ui.progress);
@@ -225,10 +252,15 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn write_outputs(dir: &Path, scene: &Scene, run: &MethodRun, reference: &Field) -> anyhow::Result<()> {
-    let style = FieldStyle::Tonemapped { exposure: scene.desc.render.exposure };
+    let style = FieldStyle::Tonemapped {
+        exposure: scene.desc.render.exposure,
+    };
     let title = format!("{:?}: {} records", run.method, run.records);
     let png = dir.join("field.png");
-    wrote(&png, write_png(&png, &field_figure(&run.field, Some(scene), &style, Some(&title))))?;
+    wrote(
+        &png,
+        write_png(&png, &field_figure(&run.field, Some(scene), &style, Some(&title))),
+    )?;
     let exr = dir.join("field.exr");
     wrote(&exr, write_exr(&exr, &run.field))?;
     super::caches_figures::write_cache_figures(dir, scene, run, reference)

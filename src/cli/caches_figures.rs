@@ -19,12 +19,24 @@ pub fn write_cache_figures(dir: &Path, scene: &Scene, run: &MethodRun, reference
     let rmse = run.errors.map_or(f64::NAN, |e| e.rmse);
     let png = dir.join("error.png");
     let title = format!("{:?}: |error|, RMSE {rmse:.3e}", run.method);
-    wrote(&png, write_png(&png, &error_map_figure(&run.field, reference, Some(scene), None, false, Some(&title))))?;
+    wrote(
+        &png,
+        write_png(
+            &png,
+            &error_map_figure(&run.field, reference, Some(scene), None, false, Some(&title)),
+        ),
+    )?;
     if run.records > 0 {
         let png = dir.join("records.png");
         let style = RecordStyle::colored(RecordColor::ByRadius);
         let title = format!("{:?}", run.method);
-        wrote(&png, write_png(&png, &records_figure(Some(&run.field), scene, &all_records(run), &style, Some(&title))))?;
+        wrote(
+            &png,
+            write_png(
+                &png,
+                &records_figure(Some(&run.field), scene, &all_records(run), &style, Some(&title)),
+            ),
+        )?;
     }
     Ok(())
 }

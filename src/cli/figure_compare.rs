@@ -11,8 +11,8 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use volcache::figure::{
-    FieldStyle, RecordColor, RecordStyle, compose_grid, error_map_figure, field_figure, record_color_scale, records_figure,
-    shared_error_range,
+    FieldStyle, RecordColor, RecordStyle, compose_grid, error_map_figure, field_figure, record_color_scale,
+    records_figure, shared_error_range,
 };
 use volcache::flatland::field::{FieldParams, field_errors};
 use volcache::output::{write_json, write_png};
@@ -57,7 +57,11 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
         cache.caches = Some(200);
     }
     let fp = field_params(&scene, &cache);
-    let ref_fp = FieldParams { spp: cache.ref_spp, seed: cache.seed ^ 0x5EED, ..fp.clone() };
+    let ref_fp = FieldParams {
+        spp: cache.ref_spp,
+        seed: cache.seed ^ 0x5EED,
+        ..fp.clone()
+    };
     let (reference, ref_info) = reference_field(&scene, &ref_fp, &cache.ref_cache, cache.quiet)?;
     let mut runs = Vec::new();
     for method in [MethodArg::Ours, MethodArg::Jarosz08] {
@@ -71,20 +75,41 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
         r.errors = Some(field_errors(&r.field, &reference));
         runs.push(r);
     }
-    let tone = FieldStyle::Tonemapped { exposure: scene.desc.render.exposure };
+    let tone = FieldStyle::Tonemapped {
+        exposure: scene.desc.render.exposure,
+    };
     let range = shared_error_range(&[(&runs[0].field, &reference), (&runs[1].field, &reference)], false);
     // One colour range for both distributions, so radii compare across methods.
     let both: Vec<_> = runs.iter().flat_map(all_records).collect();
     let mut style = RecordStyle::colored(RecordColor::ByRadius);
     style.range = record_color_scale(&both, &style).map(|s| (s.min, s.max));
-    let ref_caption = format!("{} spp path tracing\nrel. std error {:.2}%", ref_info.spp, 100.0 * ref_info.mean_relative_std_error);
-    let names = ["ours (aware, Hessian ellipses)", "Jarosz 2008 (unaware, gradient circles)"];
-    let mut row_fields = vec![(Some("reference".to_string()), field_figure(&reference, Some(&scene), &tone, None), Some(ref_caption))];
+    let ref_caption = format!(
+        "{} spp path tracing\nrel. std error {:.2}%",
+        ref_info.spp,
+        100.0 * ref_info.mean_relative_std_error
+    );
+    let names = [
+        "ours (aware, Hessian ellipses)",
+        "Jarosz 2008 (unaware, gradient circles)",
+    ];
+    let mut row_fields = vec![(
+        Some("reference".to_string()),
+        field_figure(&reference, Some(&scene), &tone, None),
+        Some(ref_caption),
+    )];
     let mut row_records = Vec::new();
     let mut row_errors = Vec::new();
     for (r, name) in runs.iter().zip(names) {
-        row_fields.push((Some(name.to_string()), field_figure(&r.field, Some(&scene), &tone, None), Some(caption(r))));
-        row_records.push((Some(format!("{name}: records")), records_figure(None, &scene, &all_records(r), &style, None), None));
+        row_fields.push((
+            Some(name.to_string()),
+            field_figure(&r.field, Some(&scene), &tone, None),
+            Some(caption(r)),
+        ));
+        row_records.push((
+            Some(format!("{name}: records")),
+            records_figure(None, &scene, &all_records(r), &style, None),
+            None,
+        ));
         row_errors.push((
             Some(format!("{name}: |error|")),
             error_map_figure(&r.field, &reference, Some(&scene), Some(range), false, None),
@@ -95,7 +120,13 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
     let pix = compose_grid(&[row_fields, row_records, row_errors], Some(&title));
     let png = a.out.join(format!("compare_{stem}.png"));
     wrote(&png, write_png(&png, &pix))?;
-    let report = Report { scene: &scene.source, params: &fp, target_records: cache.caches, reference: &ref_info, runs: &runs };
+    let report = Report {
+        scene: &scene.source,
+        params: &fp,
+        target_records: cache.caches,
+        reference: &ref_info,
+        runs: &runs,
+    };
     let json = a.out.join(format!("compare_{stem}.json"));
     wrote(&json, write_json(&json, &report))?;
     Ok(ExitCode::SUCCESS)

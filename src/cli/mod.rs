@@ -1,5 +1,6 @@
 //! Command-line definitions (clap) and dispatch.
 
+mod app;
 mod bench;
 mod bench_derivs;
 mod bench_tradeoff;
@@ -8,10 +9,12 @@ mod caches_figures;
 mod common;
 mod field;
 mod figure;
+mod figure_compare;
 mod figure_draw;
 mod probe;
 mod probe_derivs;
 mod reference;
+mod render3d;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -26,12 +29,15 @@ pub struct Cli {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, global = true)]
     threads: Option<usize>,
+    /// Without a command: the interactive workbench on the default scene.
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// The interactive workbench (a window): the field, probe inspector, overlays, editing.
+    App(app::AppArgs),
     /// Render a scene's radiance field (L_s or fluence) to PNG, and optionally EXR and JSON.
     Field(field::FieldArgs),
     /// Estimate L_s (or fluence) and its parts at points, printed as a table or JSON.
@@ -45,17 +51,23 @@ enum Command {
     /// Figures of the paper, computed and drawn (PNG + JSON with every number).
     #[command(subcommand)]
     Figure(figure::FigureCommand),
+    Render3d(render3d::Render3dArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global()?;
     }
-    match cli.command {
+    let Some(command) = cli.command else {
+        return app::run(app::AppArgs::default());
+    };
+    match command {
+        Command::App(a) => app::run(a),
         Command::Field(a) => field::run(a),
         Command::Probe(a) => probe::run(a),
         Command::Caches(a) => caches::run(a),
         Command::Bench(b) => bench::run(b),
         Command::Figure(f) => figure::run(f),
+        Command::Render3d(a) => render3d::run(a),
     }
 }

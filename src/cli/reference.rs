@@ -26,17 +26,28 @@ pub struct ReferenceInfo {
 
 /// FNV-1a: a stable hash (unlike std's, it does not change between Rust versions).
 fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 pub fn reference_key(scene: &Scene, fp: &FieldParams) -> String {
-    let text = format!("{}|{}", serde_json::to_string(&scene.desc).unwrap_or_default(), serde_json::to_string(fp).unwrap_or_default());
+    let text = format!(
+        "{}|{}",
+        serde_json::to_string(&scene.desc).unwrap_or_default(),
+        serde_json::to_string(fp).unwrap_or_default()
+    );
     format!("{:016x}", fnv1a(text.as_bytes()))
 }
 
 /// The reference field for `fp` (its spp is the reference's), from `dir` when it
 /// is there, otherwise rendered (with a progress bar) and stored.
-pub fn reference_field(scene: &Scene, fp: &FieldParams, dir: &Path, quiet: bool) -> anyhow::Result<(Field, ReferenceInfo)> {
+pub fn reference_field(
+    scene: &Scene,
+    fp: &FieldParams,
+    dir: &Path,
+    quiet: bool,
+) -> anyhow::Result<(Field, ReferenceInfo)> {
     let key = reference_key(scene, fp);
     let exr: PathBuf = dir.join(format!("{key}.exr"));
     let json = dir.join(format!("{key}.json"));
@@ -53,7 +64,10 @@ pub fn reference_field(scene: &Scene, fp: &FieldParams, dir: &Path, quiet: bool)
         info.from_disk = true;
         return Ok((field, info));
     }
-    let ui = ProgressUi::new(&format!("reference {}x{} @ {} spp", fp.width, fp.height, fp.spp), !quiet);
+    let ui = ProgressUi::new(
+        &format!("reference {}x{} @ {} spp", fp.width, fp.height, fp.spp),
+        !quiet,
+    );
     let r = render_field(scene, fp, &ui.progress);
     ui.finish();
     let r = r.map_err(|_| anyhow::anyhow!("cancelled"))?;
@@ -66,7 +80,8 @@ pub fn reference_field(scene: &Scene, fp: &FieldParams, dir: &Path, quiet: bool)
         seconds: r.seconds,
         from_disk: false,
     };
-    write_atomic(&exr, &encode_exr(&r.field)?).with_context(|| format!("caching the reference in {}", dir.display()))?;
+    write_atomic(&exr, &encode_exr(&r.field)?)
+        .with_context(|| format!("caching the reference in {}", dir.display()))?;
     write_json(&json, &info)?;
     Ok((r.field, info))
 }

@@ -149,7 +149,13 @@ pub fn placement_order(width: usize, height: usize) -> Vec<usize> {
     order
 }
 
-fn compute_record(scene: &Scene, x: DVec2, omega_o: DVec2, cs: &CacheSettings, pixel: usize) -> Result<RecordData, Cancelled> {
+fn compute_record(
+    scene: &Scene,
+    x: DVec2,
+    omega_o: DVec2,
+    cs: &CacheSettings,
+    pixel: usize,
+) -> Result<RecordData, Cancelled> {
     let seed = mix64(cs.seed ^ mix64(pixel as u64));
     let lf = capture(scene, x, omega_o, &cs.probe, seed, 0, &Progress::new())?;
     let (parts, metric_hessians) = match cs.method {
@@ -163,7 +169,11 @@ fn compute_record(scene: &Scene, x: DVec2, omega_o: DVec2, cs: &CacheSettings, p
         }
         CacheMethod::Jarosz08 => (derivatives::unaware(&lf), [DMat2::ZERO; 3]),
     };
-    Ok(RecordData { parts, metric_hessians, rays: lf.cost_rays })
+    Ok(RecordData {
+        parts,
+        metric_hessians,
+        rays: lf.cost_rays,
+    })
 }
 
 /// Elements with `fraction` × their mean radiance added (metric Hessian only).
@@ -174,7 +184,13 @@ fn with_radiance_floor(elements: &[Element], fraction: f64) -> Vec<Element> {
     let mean = elements.iter().map(|e| e.radiance).sum::<Rgb>() / elements.len() as f64;
     // If every ray returned black, a unit radiance gives a purely geometric Hessian.
     let floor = if mean == Rgb::ZERO { Rgb::ONE } else { mean * fraction };
-    elements.iter().map(|e| Element { radiance: e.radiance + floor, ..*e }).collect()
+    elements
+        .iter()
+        .map(|e| Element {
+            radiance: e.radiance + floor,
+            ..*e
+        })
+        .collect()
 }
 
 fn extent_of(value: &Payload, hess: DMat2, method: CacheMethod, metric: &MetricParams) -> Extent<D2> {
@@ -282,7 +298,12 @@ pub fn render_cached(
             let q = quantities[c];
             let value = payload(d, q);
             let extent = extent_of(&value, d.metric_hessians[q], cs.method, &metric);
-            let record = Record { position: x, value, extent, cost_rays: d.rays };
+            let record = Record {
+                position: x,
+                value,
+                extent,
+                cost_rays: d.rays,
+            };
             // Non-finite payloads are rejected by the cache; skip them rather than fail.
             let _ = caches[c].insert(record);
         }
@@ -305,13 +326,18 @@ pub fn render_cached(
                         return (Rgb::ZERO, false, true);
                     };
                     let direct = if matches!(fp.part, Part::All | Part::Direct) {
-                        let lobe = Lobe::Phase { hg: m.phase, travel: -omega_o };
+                        let lobe = Lobe::Phase {
+                            hg: m.phase,
+                            travel: -omega_o,
+                        };
                         direct_lights(scene, x, &lobe, None, &mut rays) * m.sigma_s
                     } else {
                         Rgb::ZERO
                     };
-                    let cached: Vec<Option<Rgb>> =
-                        caches.iter().map(|c| reconstruct(scene, c, x, second_order, &mut scratch)).collect();
+                    let cached: Vec<Option<Rgb>> = caches
+                        .iter()
+                        .map(|c| reconstruct(scene, c, x, second_order, &mut scratch))
+                        .collect();
                     let covered = cached.iter().all(Option::is_some);
                     let cached: Vec<Rgb> = cached.into_iter().map(|c| c.unwrap_or(Rgb::ZERO)).collect();
                     let v = match (fp.part, per_part) {

@@ -141,7 +141,9 @@ use super::direct::DirectLight;
 use super::probe::LightField;
 use super::proxy::{Element, ElementKind};
 use crate::core::distance::distance;
-use crate::core::element::{medium_form_factor_smoothed, near_distance, segment_form_factor, segment_form_factor_clamped};
+use crate::core::element::{
+    medium_form_factor_smoothed, near_distance, segment_form_factor, segment_form_factor_clamped,
+};
 
 /// Settings of the occlusion-aware method.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -238,7 +240,11 @@ pub fn direct_derivatives(lf: &LightField) -> TaylorRgb<D2> {
 pub fn element_contribution(lf: &LightField, e: &Element, medium_clamp: f64) -> TaylorRgb<D2> {
     let soft = near_distance((e.b - e.a).length());
     let phase = phase_taylor::<D2>(lf.g, lf.x, e.anchor, lf.omega_o, soft);
-    element_incident(lf, e, medium_clamp).mul_channels([phase * lf.sigma_s.x, phase * lf.sigma_s.y, phase * lf.sigma_s.z])
+    element_incident(lf, e, medium_clamp).mul_channels([
+        phase * lf.sigma_s.x,
+        phase * lf.sigma_s.y,
+        phase * lf.sigma_s.z,
+    ])
 }
 
 /// The light an element sends to x, T L F (no phase, no σ_s), with derivatives.
@@ -251,9 +257,7 @@ pub fn element_incident(lf: &LightField, e: &Element, medium_clamp: f64) -> Tayl
         // A shell piece bridging an occluder's edge: like a surface element, its
         // subtended angle (times the thickness Δt carried in its radiance) changes as
         // the edge moves. Its near field is bounded at the march resolution.
-        ElementKind::Medium if e.bridging => {
-            segment_form_factor_clamped(e.a, e.b, x, soft.max(medium_clamp * lf.step))
-        }
+        ElementKind::Medium if e.bridging => segment_form_factor_clamped(e.a, e.b, x, soft.max(medium_clamp * lf.step)),
         // An ordinary shell piece: a fixed area A = width·Δt with form factor A/r
         // (theory.md §5). Its radiance carries Δt already, so the measure is the width.
         // (The subtended-angle form would make the gradient's noise grow like √N:
@@ -289,7 +293,9 @@ impl Moments {
                 let per: Vec<[Taylor2<D2>; 2]> = m.iter().map(|k| [k[0].channels[c], k[1].channels[c]]).collect();
                 crate::core::harmonics::hg2_in_scatter(self.g, &per, omega_o) * self.sigma_s[c]
             };
-            TaylorRgb { channels: [ch(0), ch(1), ch(2)] }
+            TaylorRgb {
+                channels: [ch(0), ch(1), ch(2)],
+            }
         };
         (eval(&self.single), eval(&self.multiple))
     }
@@ -314,7 +320,12 @@ pub fn aware_moments(lf: &LightField, elements: &[Element], settings: &AwareSett
             m[1] += incident.mul_channels([b[1]; 3]);
         }
     }
-    Moments { single, multiple, g: lf.g, sigma_s: lf.sigma_s }
+    Moments {
+        single,
+        multiple,
+        g: lf.g,
+        sigma_s: lf.sigma_s,
+    }
 }
 
 /// Ours: value, gradient and Hessian of L_s from the proxy elements.

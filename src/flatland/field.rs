@@ -198,7 +198,11 @@ pub struct FieldErrors {
 
 /// RMSE, relMSE and max error of `test` against `reference` (same grid).
 pub fn field_errors(test: &Field, reference: &Field) -> FieldErrors {
-    assert_eq!((test.width, test.height), (reference.width, reference.height), "fields must share a grid");
+    assert_eq!(
+        (test.width, test.height),
+        (reference.width, reference.height),
+        "fields must share a grid"
+    );
     let pairs: Vec<(f64, f64)> = test
         .values
         .iter()
@@ -215,7 +219,11 @@ pub fn field_errors(test: &Field, reference: &Field) -> FieldErrors {
     let floor = 0.01 * mean_ref * mean_ref;
     FieldErrors {
         rmse: (pairs.iter().map(|(a, b)| (a - b).powi(2)).sum::<f64>() / n).sqrt(),
-        relmse: pairs.iter().map(|(a, b)| (a - b).powi(2) / (b * b + floor).max(f64::MIN_POSITIVE)).sum::<f64>() / n,
+        relmse: pairs
+            .iter()
+            .map(|(a, b)| (a - b).powi(2) / (b * b + floor).max(f64::MIN_POSITIVE))
+            .sum::<f64>()
+            / n,
         max_abs: pairs.iter().map(|(a, b)| (a - b).abs()).fold(0.0, f64::max),
         mean_reference: mean_ref,
         pixels: pairs.len(),

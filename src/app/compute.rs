@@ -1,0 +1,418 @@
+//! What the app computes in the background, through the same library calls as the
+//! command line: `render_field` (as `volcache field`), `probe::capture` +
+//! `proxy::build` + `derivatives::{aware, unaware}` (as `volcache probe --method
+//! aware|unaware`, same seed and item), `derivatives::reference`, and a grid of
+//! light fields with the seeds of `volcache figure gradients`.
+
+use super::jobs::{Job, Notify, Priority, Reporter};
+use crate::core::color::{Rgb, luminance};
+use crate::core::rng::mix64;
+use crate::flatland::derivatives::{self, AwareSettings, PartDerivs, ReferenceSettings};
+use crate::flatland::field::{FieldParams, RenderedField, render_field};
+use crate::flatland::probe::{LightField, ProbeSettings, capture};
+use crate::flatland::proxy::{self, Element};
+use crate::flatland::scene::Scene;
+use crate::flatland::transport::Settings;
+use crate::progress::Cancelled;
+use glam::DVec2;
+use std::sync::Arc;
+
+/// Settings of the derivative methods and overlays (the side panel's "Method").
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodParams {
+    /// Directions per light field of the probe (`probe --rays`).
+    pub rays: usize,
+    /// Ray-marched medium samples per ray (`--steps`).
+    pub steps: usize,
+    /// Recursive paths per hit and medium sample (`--paths`).
+    pub paths: u32,
+    /// Samples per stencil point of the finite-difference reference (`--spp`).
+    pub ref_spp: u32,
+    /// Finite-difference step, fraction of the scene size (`--fd-step`).
+    pub fd_step: f64,
+    /// Error threshold ε of the cache metric (ellipse / circle of the inspector).
+    pub eps: f64,
+    /// Gradient overlay: grid points per side and directions per light field.
+    pub grid: usize,
+    pub grid_rays: usize,
+}
+
+impl Default for MethodParams {
+    fn default() -> Self {
+        MethodParams {
+            rays: 2048,
+            steps: 24,
+            paths: 1,
+            ref_spp: ReferenceSettings::default().spp,
+            fd_step: 1e-2,
+            eps: 0.05,
+            grid: 16,
+            grid_rays: 256,
+        }
+    }
+}
+
+impl MethodParams {
+    pub fn probe_settings(&self, rays: usize, settings: Settings) -> ProbeSettings {
+        ProbeSettings {
+            rays: rays.max(3),
+            paths: self.paths.max(1),
+            steps: self.steps.max(1),
+            settings,
+            ..Default::default()
+        }
+    }
+}
+
+/// One refinement level of the field.
+pub struct FieldLevel {
+    /// 1-based level and the number of levels.
+    pub level: usize,
+    pub levels: usize,
+    pub params: FieldParams,
+    pub rendered: RenderedField,
+}
+
+/// Coarse-to-fine levels ending with `p` itself: longest side 32 at ≤ 4 spp, then
+/// 128 at ≤ 16 spp, each only when clearly coarser than the final one.
+pub fn field_levels(p: &FieldParams) -> Vec<FieldParams> {
+    let longest = p.width.max(p.height).max(1);
+    let mut out = Vec::new();
+    for (side, spp) in [(32usize, 4u32), (128, 16)] {
+        if longest as f64 >= 1.5 * side as f64 {
+            let s = side as f64 / longest as f64;
+            out.push(FieldParams {
+                width: ((p.width as f64 * s).round() as usize).max(1),
+                height: ((p.height as f64 * s).round() as usize).max(1),
+                spp: spp.min(p.spp).max(1),
+                ..p.clone()
+            });
+        }
+    }
+    out.push(p.clone());
+    out
+}
+
+/// Render the levels one after the other, sending each as it lands.
+pub fn spawn_field(scene: Arc<Scene>, params: FieldParams, notify: Notify) -> Job<Arc<FieldLevel>> {
+    Job::spawn(
+        "field",
+        Priority::Background,
+        notify,
+        move |r: &Reporter<Arc<FieldLevel>>| {
+            let levels = field_levels(&params);
+            let n = levels.len();
+            for (i, lp) in levels.into_iter().enumerate() {
+                r.stage(format!(
+                    "field {}/{n}: {}×{} @ {} spp",
+                    i + 1,
+                    lp.width,
+                    lp.height,
+                    lp.spp
+                ));
+                let rendered = render_field(&scene, &lp, r.progress())?;
+                r.add_rays(rendered.rays);
+                r.send(Arc::new(FieldLevel {
+                    level: i + 1,
+                    levels: n,
+                    params: lp,
+                    rendered,
+                }));
+            }
+            Ok(())
+        },
+    )
+}
+
+/// Radiance arriving at the probe from one direction (luminance): from the surface
+/// the ray hits, and from the medium along it (Σ T·L_s·Δt over its samples).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incoming {
+    pub angle: f64,
+    pub surface: f64,
+    pub medium: f64,
+}
+
+/// The probe inspector's data.
+pub struct ProbeResult {
+    pub at: DVec2,
+    pub inside_medium: bool,
+    pub light_field: LightField,
+    pub elements: Vec<Element>,
+    pub incoming: Vec<Incoming>,
+    pub aware: PartDerivs,
+    pub unaware: PartDerivs,
+    pub rays: u64,
+    pub seconds: f64,
+}
+
+fn incoming(scene: &Scene, lf: &LightField) -> Vec<Incoming> {
+    let t = |dir: DVec2, d: f64| {
+        scene
+            .medium
+            .as_ref()
+            .map_or(Rgb::ONE, |m| m.transmittance(lf.x, dir, d))
+    };
+    lf.rays
+        .iter()
+        .map(|r| Incoming {
+            angle: r.dir.y.atan2(r.dir.x),
+            surface: r.hit.map_or(0.0, |h| luminance(h.radiance * t(r.dir, r.length))),
+            medium: r
+                .samples
+                .iter()
+                .enumerate()
+                .map(|(i, s)| luminance(*s * t(r.dir, lf.sample_depth(r, i))) * lf.step)
+                .sum(),
+        })
+        .collect()
+}
+
+/// Light field, proxy, aware and unaware derivatives at `x` (`volcache probe
+/// --method aware|unaware --seed seed`: the same light field).
+pub fn spawn_probe(
+    scene: Arc<Scene>,
+    x: DVec2,
+    omega_o: DVec2,
+    ps: ProbeSettings,
+    seed: u64,
+    notify: Notify,
+) -> Job<Arc<ProbeResult>> {
+    Job::spawn(
+        "probe",
+        Priority::Interactive,
+        notify,
+        move |r: &Reporter<Arc<ProbeResult>>| {
+            r.stage(format!("probe: light field, {} rays", ps.rays));
+            r.progress().start(1);
+            let start = std::time::Instant::now();
+            let lf = capture(&scene, x, omega_o, &ps, seed, 0, r.progress())?;
+            r.add_rays(lf.cost_rays);
+            let aw = AwareSettings::default();
+            let elements = proxy::build(&lf, aw.rule);
+            let aware = derivatives::aware(&lf, &elements, &aw);
+            let unaware = derivatives::unaware(&lf);
+            r.progress().advance(1);
+            r.send(Arc::new(ProbeResult {
+                at: x,
+                inside_medium: scene.medium_at(x).is_some(),
+                incoming: incoming(&scene, &lf),
+                rays: lf.cost_rays,
+                light_field: lf,
+                elements,
+                aware,
+                unaware,
+                seconds: start.elapsed().as_secs_f64(),
+            }));
+            Ok(())
+        },
+    )
+}
+
+/// The finite-difference reference as the mean of independent batches (so it has a
+/// progress bar, can be cancelled, and carries its own standard error).
+pub struct ReferenceResult {
+    pub batches: Vec<PartDerivs>,
+    /// Batches planned.
+    pub planned: usize,
+    pub spp_per_batch: u32,
+    pub rays: u64,
+    pub seconds: f64,
+}
+
+impl ReferenceResult {
+    pub fn mean(&self) -> PartDerivs {
+        let n = self.batches.len().max(1) as f64;
+        let mut m = PartDerivs::default();
+        for b in &self.batches {
+            m.direct += b.direct;
+            m.single += b.single;
+            m.multiple += b.multiple;
+        }
+        PartDerivs {
+            direct: m.direct.scale(1.0 / n),
+            single: m.single.scale(1.0 / n),
+            multiple: m.multiple.scale(1.0 / n),
+        }
+    }
+}
+
+/// Batches of the reference (their spread estimates its error).
+pub const REFERENCE_BATCHES: usize = 8;
+
+#[allow(clippy::too_many_arguments)]
+pub fn spawn_reference(
+    scene: Arc<Scene>,
+    x: DVec2,
+    omega_o: DVec2,
+    spp: u32,
+    relative_step: f64,
+    settings: Settings,
+    seed: u64,
+    notify: Notify,
+) -> Job<Arc<ReferenceResult>> {
+    Job::spawn(
+        "reference",
+        Priority::Interactive,
+        notify,
+        move |r: &Reporter<Arc<ReferenceResult>>| {
+            let n = REFERENCE_BATCHES;
+            let rs = ReferenceSettings {
+                spp: spp.div_ceil(n as u32).max(1),
+                relative_step,
+            };
+            r.stage(format!("reference: {n} × {} spp per stencil point", rs.spp));
+            r.progress().start(n as u64);
+            let start = std::time::Instant::now();
+            let mut res = ReferenceResult {
+                batches: Vec::new(),
+                planned: n,
+                spp_per_batch: rs.spp,
+                rays: 0,
+                seconds: 0.0,
+            };
+            for k in 0..n {
+                r.progress().check()?;
+                let d = derivatives::reference(&scene, x, omega_o, &rs, &settings, mix64(seed ^ (k as u64 + 1)));
+                r.add_rays(d.rays);
+                res.rays += d.rays;
+                res.batches.push(d.parts);
+                res.seconds = start.elapsed().as_secs_f64();
+                r.progress().advance(1);
+                r.send(Arc::new(ReferenceResult {
+                    batches: res.batches.clone(),
+                    ..res
+                }));
+            }
+            Ok(())
+        },
+    )
+}
+
+/// One point of the gradient overlay (None outside the medium: L_s undefined).
+#[derive(Clone, Copy, Debug)]
+pub struct GridPoint {
+    pub at: DVec2,
+    pub aware: Option<PartDerivs>,
+    pub unaware: Option<PartDerivs>,
+}
+
+/// Grid points computed so far, in order.
+pub struct GradientGrid {
+    pub n: usize,
+    pub cell: DVec2,
+    pub points: Vec<GridPoint>,
+}
+
+/// Cell centres of an n × n grid over the domain, row by row from the bottom (the
+/// order and seeds of `volcache figure gradients --grid n`).
+pub fn grid_points(scene: &Scene, n: usize) -> Vec<DVec2> {
+    let (lo, size) = (scene.domain_min, scene.domain_max - scene.domain_min);
+    (0..n * n)
+        .map(|k| lo + size * DVec2::new((k % n) as f64 + 0.5, (k / n) as f64 + 0.5) / n as f64)
+        .collect()
+}
+
+/// The seed of grid point k (as `figure gradients`).
+pub fn grid_seed(seed: u64, k: usize) -> u64 {
+    mix64(seed ^ mix64(k as u64))
+}
+
+pub fn spawn_gradients(
+    scene: Arc<Scene>,
+    n: usize,
+    omega_o: DVec2,
+    ps: ProbeSettings,
+    seed: u64,
+    notify: Notify,
+) -> Job<Arc<GradientGrid>> {
+    Job::spawn(
+        "gradients",
+        Priority::Background,
+        notify,
+        move |r: &Reporter<Arc<GradientGrid>>| {
+            let n = n.max(1);
+            let pts = grid_points(&scene, n);
+            r.stage(format!("gradient overlay: {n}×{n} light fields of {} rays", ps.rays));
+            r.progress().start(pts.len() as u64);
+            let cell = (scene.domain_max - scene.domain_min) / n as f64;
+            let mut done = Vec::with_capacity(pts.len());
+            let aw = AwareSettings::default();
+            for (k, &x) in pts.iter().enumerate() {
+                let mut p = GridPoint {
+                    at: x,
+                    aware: None,
+                    unaware: None,
+                };
+                if scene.medium_at(x).is_some() {
+                    let lf = capture(&scene, x, omega_o, &ps, grid_seed(seed, k), 0, r.progress())?;
+                    r.add_rays(lf.cost_rays);
+                    p.aware = Some(derivatives::aware(&lf, &proxy::build(&lf, aw.rule), &aw));
+                    p.unaware = Some(derivatives::unaware(&lf));
+                }
+                done.push(p);
+                r.progress().advance(1);
+                // A row at a time, so the overlay fills in as it goes.
+                if (k + 1) % n == 0 {
+                    r.send(Arc::new(GradientGrid {
+                        n,
+                        cell,
+                        points: done.clone(),
+                    }));
+                }
+            }
+            Result::<(), Cancelled>::Ok(())
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::jobs::no_notify;
+
+    #[test]
+    fn levels_go_coarse_to_fine_and_end_with_the_request() {
+        let p = FieldParams::from_scene(&Scene::default_scene());
+        let l = field_levels(&p);
+        let sizes: Vec<_> = l.iter().map(|q| (q.width, q.height, q.spp)).collect();
+        assert_eq!(sizes, vec![(32, 32, 4), (128, 128, 16), (256, 256, 128)]);
+        assert_eq!(l[2], p);
+        let small = FieldParams {
+            width: 40,
+            height: 20,
+            spp: 2,
+            ..p.clone()
+        };
+        assert_eq!(field_levels(&small), vec![small.clone()]);
+        let wide = FieldParams {
+            width: 300,
+            height: 100,
+            ..p
+        };
+        let l = field_levels(&wide);
+        assert_eq!((l[0].width, l[0].height, l[1].width, l[1].height), (32, 11, 128, 43));
+    }
+
+    #[test]
+    fn field_job_sends_every_level_and_matches_a_direct_render() {
+        let scene = Arc::new(Scene::default_scene());
+        let p = FieldParams {
+            width: 48,
+            height: 48,
+            spp: 2,
+            ..FieldParams::from_scene(&scene)
+        };
+        let job = spawn_field(scene.clone(), p.clone(), no_notify());
+        let mut got = Vec::new();
+        let t = std::time::Instant::now();
+        while got.len() < 2 {
+            got.extend(job.poll());
+            assert!(t.elapsed().as_secs() < 30);
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        assert_eq!((got[0].level, got[1].level, got[1].levels), (1, 2, 2));
+        let direct = render_field(&scene, &p, &crate::progress::Progress::new()).unwrap();
+        assert_eq!(got[1].rendered.field, direct.field, "same as `volcache field`");
+    }
+}

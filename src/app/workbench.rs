@@ -1,0 +1,477 @@
+//! The workbench's state and its per-frame scheduling. [`Workbench::tick`] (no UI)
+//! takes in results and makes sure the right jobs run for the current scene
+//! revision and parameters, cancelling the stale ones; [`Workbench::ui`] lays out
+//! the panels (controls, canvas, inspector, status bar) around it.
+
+use super::compute::{
+    FieldLevel, GradientGrid, MethodParams, ProbeResult, ReferenceResult, spawn_field, spawn_gradients, spawn_probe,
+    spawn_reference,
+};
+use super::document::Document;
+use super::edit::{Handle, Selection};
+use super::jobs::{Notify, Slot, no_notify};
+use super::overlay::{Overlay, Overlays};
+use super::view::{ViewState, Xform};
+use crate::figure::ColorScale;
+use crate::flatland::field::FieldParams;
+use crate::flatland::probe::ProbeSettings;
+use crate::flatland::scene_desc::Part;
+use crate::flatland::transport::Settings;
+use eframe::egui;
+use glam::DVec2;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// How the field is shown (changing it re-maps colours, never recomputes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Display {
+    /// Log luminance through viridis with a colour bar, else tone-mapped RGB.
+    pub false_color: bool,
+    /// Stops, tone-mapped display only.
+    pub exposure: f64,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Message {
+    pub text: String,
+    pub error: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum DragKind {
+    Handle(Handle),
+    Pan,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct DragState {
+    pub kind: DragKind,
+    pub last_world: DVec2,
+}
+
+#[derive(PartialEq)]
+pub(super) struct ProbeKey {
+    revision: u64,
+    at: DVec2,
+    ps: ProbeSettings,
+    seed: u64,
+    omega_o_deg: f64,
+}
+
+#[derive(PartialEq)]
+pub(super) struct ReferenceKey {
+    revision: u64,
+    at: DVec2,
+    spp: u32,
+    fd_step: f64,
+    settings: Settings,
+    seed: u64,
+    omega_o_deg: f64,
+}
+
+#[derive(PartialEq)]
+pub(super) struct GradientKey {
+    revision: u64,
+    n: usize,
+    ps: ProbeSettings,
+    seed: u64,
+    omega_o_deg: f64,
+}
+
+pub struct Workbench {
+    pub doc: Document,
+    pub field_params: FieldParams,
+    pub display: Display,
+    pub method: MethodParams,
+    pub overlays: Overlays,
+    /// The gradient overlay shows the aware method (else unaware).
+    pub gradient_aware: bool,
+    pub probe: Option<DVec2>,
+    pub selection: Option<Selection>,
+    pub view: ViewState,
+    /// Compute the reference at the probe (on demand), and keep doing so as it moves.
+    pub want_reference: bool,
+    pub auto_reference: bool,
+    pub(super) field: Slot<(u64, FieldParams), Arc<FieldLevel>>,
+    pub(super) probe_job: Slot<ProbeKey, Arc<ProbeResult>>,
+    pub(super) reference: Slot<ReferenceKey, Arc<ReferenceResult>>,
+    pub(super) gradients: Slot<GradientKey, Arc<GradientGrid>>,
+    pub(super) texture: Option<(egui::TextureHandle, (usize, Display))>,
+    pub(super) color_scale: Option<ColorScale>,
+    /// The gradient overlay's texture, its key (grid, aware?, part) and arrows.
+    pub(super) gradient_tex: Option<(egui::TextureHandle, (usize, bool, Part), super::overlay::GradientView)>,
+    pub message: Option<Message>,
+    pub(super) drag: Option<DragState>,
+    pub(super) hovered: Option<Handle>,
+    pub(super) last_xf: Option<Xform>,
+    pub(super) scene_path: String,
+    pub(super) export_path: String,
+    /// Shapes the canvas drew last frame (tests check overlays through it).
+    pub shapes_drawn: usize,
+    /// Written once everything asked for is computed (`StartOptions::ready_file`).
+    ready_file: Option<std::path::PathBuf>,
+    notify: Notify,
+    has_ctx: bool,
+    generation: u64,
+    stats: super::frame_stats::FrameStats,
+}
+
+impl Workbench {
+    pub fn new(doc: Document) -> Self {
+        let scene = doc.scene().clone();
+        let field_params = FieldParams::from_scene(&scene);
+        let scene_path = doc.path().map_or(String::new(), |p| p.display().to_string());
+        let export_path = format!("out/{}_app.png", doc.stem());
+        Workbench {
+            display: Display {
+                false_color: false,
+                exposure: scene.desc.render.exposure,
+            },
+            field_params,
+            method: MethodParams::default(),
+            overlays: Overlays::default(),
+            gradient_aware: true,
+            probe: None,
+            selection: None,
+            view: ViewState::default(),
+            want_reference: false,
+            auto_reference: false,
+            field: Slot::default(),
+            probe_job: Slot::default(),
+            reference: Slot::default(),
+            gradients: Slot::default(),
+            texture: None,
+            color_scale: None,
+            gradient_tex: None,
+            message: None,
+            drag: None,
+            hovered: None,
+            last_xf: None,
+            scene_path,
+            export_path,
+            shapes_drawn: 0,
+            ready_file: None,
+            notify: no_notify(),
+            has_ctx: false,
+            generation: doc.generation(),
+            stats: super::frame_stats::FrameStats::from_env(),
+            doc,
+        }
+    }
+
+    /// Apply the start-up options of `volcache app`.
+    pub fn with_start(mut self, s: super::StartOptions) -> Self {
+        self.probe = s.probe;
+        self.overlays.set(Overlay::Gradients, s.gradients);
+        (self.want_reference, self.auto_reference) = (s.reference, s.reference);
+        self.display.false_color = s.false_color;
+        self.ready_file = s.ready_file;
+        self
+    }
+
+    /// Everything asked for is computed: the field converged, and the probe, the
+    /// reference and the gradient overlay if they are on.
+    pub fn settled(&self) -> bool {
+        self.field_converged()
+            && (self.probe.is_none() || self.probe_done())
+            && (!self.want_reference || self.reference_done())
+            && (!self.overlays.is_on(Overlay::Gradients) || self.gradients.is_done())
+    }
+
+    pub fn info(&mut self, text: impl Into<String>) {
+        self.message = Some(Message {
+            text: text.into(),
+            error: false,
+        });
+    }
+
+    pub fn error(&mut self, text: impl Into<String>) {
+        self.message = Some(Message {
+            text: text.into(),
+            error: true,
+        });
+    }
+
+    pub fn omega_o(&self) -> DVec2 {
+        DVec2::from_angle(self.field_params.omega_o_deg.to_radians())
+    }
+
+    /// The latest field level, if any.
+    pub fn field_level(&self) -> Option<&Arc<FieldLevel>> {
+        self.field.latest()
+    }
+
+    /// The field job of the current parameters has delivered every level.
+    pub fn field_converged(&self) -> bool {
+        self.field.is_done()
+    }
+
+    /// Field jobs started so far (each edit of the scene or a parameter starts one).
+    pub fn field_starts(&self) -> u64 {
+        self.field.starts
+    }
+
+    /// The current field job's status.
+    pub fn field_status(&self) -> Option<super::jobs::Status> {
+        self.field.job().map(|j| j.status())
+    }
+
+    /// A look at the current field job.
+    pub fn field_watch(&self) -> Option<super::jobs::JobWatch> {
+        self.field.job().map(|j| j.watch())
+    }
+
+    pub fn probe_result(&self) -> Option<&Arc<ProbeResult>> {
+        self.probe_job.latest().filter(|r| Some(r.at) == self.probe)
+    }
+
+    pub fn probe_done(&self) -> bool {
+        self.probe.is_some() && self.probe_job.is_done() && self.probe_result().is_some()
+    }
+
+    pub fn reference_result(&self) -> Option<&Arc<ReferenceResult>> {
+        self.reference.latest()
+    }
+
+    pub fn reference_done(&self) -> bool {
+        self.reference.is_done()
+    }
+
+    pub fn gradient_grid(&self) -> Option<&Arc<GradientGrid>> {
+        self.gradients.latest()
+    }
+
+    /// The scene file field of the side panel.
+    pub fn scene_path_mut(&mut self) -> &mut String {
+        &mut self.scene_path
+    }
+
+    /// The PNG path of "Export PNG".
+    pub fn export_path_mut(&mut self) -> &mut String {
+        &mut self.export_path
+    }
+
+    /// The screen position of a world point in the last frame's canvas.
+    pub fn screen_pos(&self, world: DVec2) -> Option<egui::Pos2> {
+        self.last_xf.map(|xf| xf.to_screen(world))
+    }
+
+    fn probe_settings(&self, rays: usize) -> ProbeSettings {
+        self.method.probe_settings(rays, self.field_params.settings)
+    }
+
+    /// Take in results and (re)start the jobs the current state needs; never blocks.
+    pub fn tick(&mut self) {
+        self.field.update();
+        self.probe_job.update();
+        self.reference.update();
+        self.gradients.update();
+        if self.doc.generation() != self.generation {
+            // A different scene: its own render defaults, a fresh view, no probe.
+            self.generation = self.doc.generation();
+            let scene = self.doc.scene();
+            self.field_params = FieldParams::from_scene(scene);
+            self.display.exposure = scene.desc.render.exposure;
+            self.view = ViewState::default();
+            (self.probe, self.selection, self.want_reference) = (None, None, false);
+            self.field.reset(true);
+            self.gradients.reset(true);
+            self.export_path = format!("out/{}_app.png", self.doc.stem());
+        }
+        let scene = self.doc.scene().clone();
+        let rev = self.doc.revision();
+        let (seed, omega) = (self.field_params.seed, self.field_params.omega_o_deg);
+        let notify = self.notify.clone();
+        let fp = self.field_params.clone();
+        self.field
+            .ensure((rev, fp.clone()), || spawn_field(scene.clone(), fp, notify.clone()));
+
+        match self.probe {
+            Some(at) => {
+                let ps = self.probe_settings(self.method.rays);
+                let key = ProbeKey {
+                    revision: rev,
+                    at,
+                    ps,
+                    seed,
+                    omega_o_deg: omega,
+                };
+                let omega_o = self.omega_o();
+                self.probe_job.ensure(key, || {
+                    spawn_probe(scene.clone(), at, omega_o, ps, seed, notify.clone())
+                });
+                let key = ReferenceKey {
+                    revision: rev,
+                    at,
+                    spp: self.method.ref_spp,
+                    fd_step: self.method.fd_step,
+                    settings: self.field_params.settings,
+                    seed,
+                    omega_o_deg: omega,
+                };
+                if self.reference.key().is_some_and(|k| *k != key) {
+                    self.reference.reset(true);
+                    self.want_reference = self.auto_reference;
+                }
+                if self.want_reference {
+                    let (spp, step, settings) = (key.spp, key.fd_step, key.settings);
+                    self.reference.ensure(key, || {
+                        spawn_reference(scene.clone(), at, omega_o, spp, step, settings, seed, notify.clone())
+                    });
+                }
+            }
+            None => {
+                self.probe_job.reset(true);
+                self.reference.reset(true);
+            }
+        }
+
+        if self.overlays.is_on(Overlay::Gradients) {
+            let ps = self.probe_settings(self.method.grid_rays);
+            let n = self.method.grid.clamp(1, 128);
+            let key = GradientKey {
+                revision: rev,
+                n,
+                ps,
+                seed,
+                omega_o_deg: omega,
+            };
+            let omega_o = self.omega_o();
+            self.gradients.ensure(key, || {
+                spawn_gradients(scene.clone(), n, omega_o, ps, seed, notify.clone())
+            });
+        } else {
+            self.gradients.reset(true);
+        }
+    }
+
+    /// Some job is computing.
+    pub fn busy(&self) -> bool {
+        self.field.running().is_some()
+            || self.probe_job.running().is_some()
+            || self.reference.running().is_some()
+            || self.gradients.running().is_some()
+    }
+
+    /// One frame of the whole window.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let start = Instant::now();
+        if !self.has_ctx {
+            let ctx = ui.ctx().clone();
+            self.notify = Arc::new(move || ctx.request_repaint());
+            self.has_ctx = true;
+        }
+        self.tick();
+        self.shortcuts(ui);
+        egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
+        egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        egui::Panel::left("controls")
+            .default_size(300.0)
+            .show(ui, |ui| egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui)));
+        if self.probe.is_some() {
+            egui::Panel::right("inspector")
+                .default_size(410.0)
+                .show(ui, |ui| egui::ScrollArea::vertical().show(ui, |ui| self.inspector(ui)));
+        }
+        egui::CentralPanel::no_frame().show(ui, |ui| self.canvas(ui));
+        // Restart what this frame's edits made stale now, not a frame later.
+        self.tick();
+
+        // A gesture (drag, slider, typing a value) ends when the pointer is up and
+        // no text field has focus.
+        let idle = ui.input(|i| !i.pointer.any_down()) && !ui.ctx().text_edit_focused();
+        if idle {
+            self.doc.end_gesture();
+        }
+        if self.busy() {
+            ui.ctx().request_repaint_after(Duration::from_millis(100));
+        }
+        if self.ready_file.is_some() && self.settled() {
+            let path = self.ready_file.take().unwrap();
+            if let Err(e) = std::fs::write(&path, "ready\n") {
+                self.error(format!("writing {}: {e}", path.display()));
+            }
+        }
+        let dt = ui.input(|i| i.unstable_dt);
+        if self.stats.record(dt, start.elapsed(), self.busy()) {
+            ui.ctx().request_repaint();
+        }
+    }
+}
+
+impl eframe::App for Workbench {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        Workbench::ui(self, ui);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> Workbench {
+        let mut wb = Workbench::new(Document::default_scene());
+        (wb.field_params.width, wb.field_params.height, wb.field_params.spp) = (8, 8, 1);
+        (wb.method.rays, wb.method.steps, wb.method.grid, wb.method.grid_rays) = (16, 2, 2, 8);
+        wb
+    }
+
+    #[test]
+    fn tick_starts_what_is_needed_and_restarts_only_on_change() {
+        let mut wb = small();
+        wb.tick();
+        assert_eq!(wb.field_starts(), 1);
+        assert!(wb.probe_job.job().is_none() && wb.gradients.job().is_none());
+        wb.tick();
+        assert_eq!(wb.field_starts(), 1, "nothing changed");
+        // A display change re-maps colours only.
+        wb.display.exposure += 1.0;
+        wb.tick();
+        assert_eq!(wb.field_starts(), 1);
+        // A scene edit restarts the field; the old job is told to stop.
+        let old = wb.field_watch().unwrap();
+        wb.doc.edit("g", |d| d.medium.as_mut().unwrap().g = 0.5).unwrap();
+        wb.tick();
+        assert!(old.is_cancel_requested());
+        assert_eq!(wb.field_starts(), 2);
+        // The probe, then the reference on demand; moving the probe drops the
+        // reference unless it follows.
+        wb.probe = Some(DVec2::new(0.0, -0.5));
+        wb.tick();
+        assert_eq!(wb.probe_job.starts, 1);
+        assert!(wb.reference.job().is_none());
+        wb.want_reference = true;
+        wb.tick();
+        assert_eq!(wb.reference.starts, 1);
+        wb.probe = Some(DVec2::new(0.1, -0.5));
+        wb.tick();
+        assert_eq!((wb.probe_job.starts, wb.reference.starts), (2, 1));
+        assert!(!wb.want_reference && wb.reference.job().is_none());
+        wb.auto_reference = true;
+        wb.want_reference = true;
+        wb.tick();
+        wb.probe = Some(DVec2::new(0.2, -0.5));
+        wb.tick();
+        assert_eq!(wb.reference.starts, 3, "following the probe");
+        // Overlays: the gradient grid runs only while shown.
+        wb.overlays.set(Overlay::Gradients, true);
+        wb.tick();
+        assert!(wb.gradients.job().is_some());
+        wb.overlays.set(Overlay::Gradients, false);
+        wb.tick();
+        assert!(wb.gradients.job().is_none());
+    }
+
+    #[test]
+    fn loading_another_scene_resets_its_render_settings() {
+        let mut wb = small();
+        wb.probe = Some(DVec2::ZERO);
+        wb.tick();
+        let json = crate::flatland::scene::DEFAULT_SCENE_JSON.replace("\"spp\": 128", "\"spp\": 3");
+        wb.doc.load_json(&json, "other.json", None).unwrap();
+        wb.tick();
+        assert_eq!((wb.field_params.spp, wb.field_params.width), (3, 256));
+        assert_eq!(wb.probe, None);
+        wb.field.reset(true); // stop the 256² job
+    }
+}

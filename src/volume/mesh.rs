@@ -1,0 +1,179 @@
+//! Triangles, and the shapes of the scene format turned into triangles: quads (two
+//! triangles), boxes (twelve, optionally rotated about y) and OBJ meshes (tobj).
+//! Every triangle keeps the index of the shape it came from (its material).
+
+use glam::{DMat3, DVec3};
+use std::path::Path;
+
+/// A triangle p0 + u·e1 + v·e2 (u, v ≥ 0, u + v ≤ 1); its front side is along
+/// e1 × e2 (counter-clockwise vertices seen from the front).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub p0: DVec3,
+    pub e1: DVec3,
+    pub e2: DVec3,
+    /// Unit geometric normal (front side).
+    pub normal: DVec3,
+    pub area: f64,
+    /// Index of the shape (material) it belongs to.
+    pub shape: u32,
+}
+
+/// A ray–triangle intersection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f64,
+    pub tri: u32,
+    pub u: f64,
+    pub v: f64,
+}
+
+impl Triangle {
+    /// None for degenerate (zero-area) triangles.
+    pub fn new(a: DVec3, b: DVec3, c: DVec3, shape: u32) -> Option<Triangle> {
+        let (e1, e2) = (b - a, c - a);
+        let n = e1.cross(e2);
+        let len = n.length();
+        (len > 0.0 && len.is_finite()).then(|| Triangle {
+            p0: a,
+            e1,
+            e2,
+            normal: n / len,
+            area: 0.5 * len,
+            shape,
+        })
+    }
+
+    pub fn vertices(&self) -> [DVec3; 3] {
+        [self.p0, self.p0 + self.e1, self.p0 + self.e2]
+    }
+
+    #[inline]
+    pub fn point_at(&self, u: f64, v: f64) -> DVec3 {
+        self.p0 + self.e1 * u + self.e2 * v
+    }
+
+    /// Möller–Trumbore: (t, u, v) for t in (t_min, t_max), both faces.
+    #[inline]
+    pub fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
+        let p = d.cross(self.e2);
+        let det = self.e1.dot(p);
+        if det == 0.0 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = o - self.p0;
+        let u = s.dot(p) * inv;
+        if !(0.0..=1.0).contains(&u) {
+            return None;
+        }
+        let q = s.cross(self.e1);
+        let v = d.dot(q) * inv;
+        if v < 0.0 || u + v > 1.0 {
+            return None;
+        }
+        let t = self.e2.dot(q) * inv;
+        (t > t_min && t < t_max).then_some((t, u, v))
+    }
+
+    /// A uniformly distributed point for (ξ1, ξ2) in [0, 1)².
+    pub fn sample_point(&self, xi1: f64, xi2: f64) -> DVec3 {
+        let s = xi1.sqrt();
+        self.point_at(s * (1.0 - xi2), s * xi2)
+    }
+}
+
+/// The two triangles of the parallelogram origin + s·u + t·v.
+pub fn quad(origin: DVec3, u: DVec3, v: DVec3, shape: u32) -> Vec<Triangle> {
+    [
+        Triangle::new(origin, origin + u, origin + u + v, shape),
+        Triangle::new(origin, origin + u + v, origin + v, shape),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// The twelve outward-facing triangles of a box, rotated by `rotate_y_deg` about
+/// the vertical axis through its centre.
+pub fn cuboid(min: DVec3, max: DVec3, rotate_y_deg: f64, shape: u32) -> Vec<Triangle> {
+    let c = 0.5 * (min + max);
+    let rot = DMat3::from_rotation_y(rotate_y_deg.to_radians());
+    let p = |x: f64, y: f64, z: f64| c + rot * (DVec3::new(x, y, z) - c);
+    let (a, b) = (min, max);
+    // Each face as (origin, u, v) with u × v pointing outwards.
+    let faces = [
+        (p(a.x, a.y, a.z), p(a.x, a.y, b.z), p(a.x, b.y, a.z)), // −x
+        (p(b.x, a.y, a.z), p(b.x, b.y, a.z), p(b.x, a.y, b.z)), // +x
+        (p(a.x, a.y, a.z), p(b.x, a.y, a.z), p(a.x, a.y, b.z)), // −y
+        (p(a.x, b.y, a.z), p(a.x, b.y, b.z), p(b.x, b.y, a.z)), // +y
+        (p(a.x, a.y, a.z), p(a.x, b.y, a.z), p(b.x, a.y, a.z)), // −z
+        (p(a.x, a.y, b.z), p(b.x, a.y, b.z), p(a.x, b.y, b.z)), // +z
+    ];
+    faces
+        .iter()
+        .flat_map(|&(o, pu, pv)| quad(o, pu - o, pv - o, shape))
+        .collect()
+}
+
+/// Triangles of every model in an OBJ file, each vertex scaled then translated.
+pub fn load_obj(path: &Path, scale: DVec3, translate: DVec3, shape: u32) -> Result<Vec<Triangle>, String> {
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| format!("cannot load `{}`: {e}", path.display()))?;
+    let mut tris = Vec::new();
+    for m in &models {
+        let pos = &m.mesh.positions;
+        let vertex = |i: u32| -> Result<DVec3, String> {
+            let k = 3 * i as usize;
+            pos.get(k..k + 3)
+                .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * scale + translate)
+                .ok_or_else(|| format!("`{}`: vertex index {} out of range", path.display(), i + 1))
+        };
+        for f in m.mesh.indices.chunks_exact(3) {
+            tris.extend(Triangle::new(vertex(f[0])?, vertex(f[1])?, vertex(f[2])?, shape));
+        }
+    }
+    if tris.is_empty() {
+        return Err(format!("`{}` has no triangles", path.display()));
+    }
+    Ok(tris)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_faces_point_outwards_and_close() {
+        let (a, b) = (DVec3::new(-1.0, 0.0, -2.0), DVec3::new(1.0, 1.0, 2.0));
+        for rot in [0.0, 30.0] {
+            let tris = cuboid(a, b, rot, 0);
+            assert_eq!(tris.len(), 12);
+            let c = 0.5 * (a + b);
+            let area: f64 = tris.iter().map(|t| t.area).sum();
+            assert!((area - 2.0 * (2.0 * 1.0 + 2.0 * 4.0 + 1.0 * 4.0)).abs() < 1e-12);
+            for t in &tris {
+                let centre = t.p0 + (t.e1 + t.e2) / 3.0;
+                assert!(t.normal.dot(centre - c) > 0.0, "inward face {t:?}");
+            }
+            // Divergence theorem: the area-weighted normals sum to zero for a closed surface.
+            let s: DVec3 = tris.iter().map(|t| t.normal * t.area).sum();
+            assert!(s.length() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn intersection_and_sampling() {
+        let t = Triangle::new(DVec3::ZERO, DVec3::X, DVec3::Y, 0).unwrap();
+        let (d, u, v) = t.intersect(DVec3::new(0.2, 0.3, 1.0), -DVec3::Z, 0.0, 10.0).unwrap();
+        assert!((d - 1.0).abs() < 1e-15 && (u - 0.2).abs() < 1e-15 && (v - 0.3).abs() < 1e-15);
+        assert!(t.intersect(DVec3::new(0.8, 0.3, 1.0), -DVec3::Z, 0.0, 10.0).is_none());
+        let p = t.sample_point(0.99, 0.5);
+        assert!(p.x >= 0.0 && p.y >= 0.0 && p.x + p.y <= 1.0);
+    }
+}

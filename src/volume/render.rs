@@ -1,0 +1,216 @@
+//! Progressive image rendering with the reference path tracer.
+//!
+//! Samples are added in passes of 1, 1, 2, 4, … samples per pixel; sample k of
+//! pixel (i, j) always draws from the stream (seed, j·W + i, k) of the *full* image,
+//! so the image depends only on the number of samples — not on threads, on the
+//! pass schedule or on the crop window (crops of one image tile it exactly). A time
+//! budget stops before a pass that would not fit, so a budget only changes how many
+//! samples were taken (reported).
+
+use super::camera::Camera;
+use super::scene::Scene;
+use super::transport::{Settings, radiance_path};
+use crate::core::color::{Rgb, luminance};
+use crate::core::rng::Sampler;
+use crate::progress::{Cancelled, Progress};
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RenderParams {
+    /// Full image size.
+    pub width: usize,
+    pub height: usize,
+    /// Pixel window [x0, x1) × [y0, y1) of the full image to render (None: all).
+    pub crop: Option<[usize; 4]>,
+    /// Samples per pixel (the most, with a time budget).
+    pub spp: u32,
+    pub seed: u64,
+    /// Seconds; stop before a pass that would exceed it.
+    pub time_budget: Option<f64>,
+    pub settings: Settings,
+}
+
+impl RenderParams {
+    pub fn from_scene(scene: &Scene) -> Self {
+        let r = &scene.desc.render;
+        RenderParams {
+            width: r.resolution[0] as usize,
+            height: r.resolution[1] as usize,
+            crop: None,
+            spp: r.spp,
+            seed: r.seed,
+            time_budget: None,
+            settings: Settings {
+                max_depth: r.max_depth,
+                ..Settings::default()
+            },
+        }
+    }
+
+    /// The window rendered: [x0, y0, x1, y1].
+    pub fn window(&self) -> [usize; 4] {
+        self.crop.unwrap_or([0, 0, self.width, self.height])
+    }
+}
+
+/// A rendered image (the crop window), linear RGB radiance, row 0 on top.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    pub width: usize,
+    pub height: usize,
+    pub values: Vec<Rgb>,
+    /// Per pixel standard error of the luminance.
+    pub std_error: Vec<f64>,
+    /// Samples per pixel actually taken.
+    pub spp: u32,
+    pub rays: u64,
+    pub seconds: f64,
+}
+
+impl Rendered {
+    /// Mean luminance standard error relative to the mean luminance.
+    pub fn relative_std_error(&self) -> f64 {
+        let n = self.values.len().max(1) as f64;
+        let mean = self.values.iter().map(|v| luminance(*v)).sum::<f64>() / n;
+        let se = (self.std_error.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+        if mean > 0.0 { se / mean } else { 0.0 }
+    }
+}
+
+/// The scene's camera for an image of `width` × `height`.
+pub fn camera(scene: &Scene, width: usize, height: usize) -> Camera {
+    let c = &scene.desc.camera;
+    let v = DVec3::from_array;
+    Camera::new(v(c.position), v(c.look_at), v(c.up), c.fov_deg, width, height)
+}
+
+/// The pass sizes: 1, 1, 2, 4, … up to `spp` in total.
+fn passes(spp: u32) -> Vec<(u32, u32)> {
+    let mut v = Vec::new();
+    let mut k = 0;
+    while k < spp {
+        let n = k.max(1).min(spp - k);
+        v.push((k, k + n));
+        k += n;
+    }
+    v
+}
+
+/// Render the window of the image. Cancellation is checked per pixel; progress
+/// counts rows of passes (with a time budget: rows of the current pass).
+pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Result<Rendered, Cancelled> {
+    let start = Instant::now();
+    let cam = camera(scene, params.width, params.height);
+    let [x0, y0, x1, y1] = params.window();
+    let (w, h) = (x1 - x0, y1 - y0);
+    let schedule = passes(params.spp);
+    progress.start((h * schedule.len()) as u64);
+    // Per pixel: Σ radiance, Σ luminance, Σ luminance², rays.
+    let mut acc = vec![(Rgb::ZERO, 0.0, 0.0); w * h];
+    // Seconds per sample of the last pass predict the next one.
+    let (mut rays, mut done, mut per_sample) = (0u64, 0u32, 0.0f64);
+    for &(k0, k1) in &schedule {
+        if let Some(budget) = params.time_budget {
+            let predicted = per_sample * (k1 - k0) as f64;
+            if done > 0 && start.elapsed().as_secs_f64() + predicted > budget {
+                break;
+            }
+        }
+        if params.time_budget.is_some() {
+            progress.start(h as u64); // the number of passes is unknown: show each pass
+        }
+        let pass_start = Instant::now();
+        let pass_rays: Vec<u64> = acc
+            .par_chunks_mut(w)
+            .enumerate()
+            .map(|(row, px)| -> Result<u64, Cancelled> {
+                let j = y0 + row;
+                let mut r = 0;
+                for (di, a) in px.iter_mut().enumerate() {
+                    progress.check()?;
+                    let i = x0 + di;
+                    let item = (j * params.width + i) as u64;
+                    for k in k0..k1 {
+                        let mut s = Sampler::new2(params.seed, item, k as u64);
+                        let p = DVec2::new(i as f64 + s.next_f64(), j as f64 + s.next_f64());
+                        let l = radiance_path(
+                            scene,
+                            cam.position,
+                            cam.direction(p),
+                            None,
+                            None,
+                            &params.settings,
+                            &mut s,
+                            &mut r,
+                        );
+                        let y = luminance(l);
+                        *a = (a.0 + l, a.1 + y, a.2 + y * y);
+                    }
+                }
+                progress.advance(1);
+                Ok(r)
+            })
+            .collect::<Result<_, _>>()?;
+        rays += pass_rays.iter().sum::<u64>();
+        per_sample = pass_start.elapsed().as_secs_f64() / (k1 - k0) as f64;
+        done = k1;
+    }
+    let n = done.max(1) as f64;
+    let values = acc.iter().map(|a| a.0 / n).collect();
+    let std_error = acc
+        .iter()
+        .map(|a| {
+            let m = a.1 / n;
+            ((a.2 / n - m * m).max(0.0) / (n - 1.0).max(1.0)).sqrt()
+        })
+        .collect();
+    Ok(Rendered {
+        width: w,
+        height: h,
+        values,
+        std_error,
+        spp: done,
+        rays,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Rays per second of closest-hit queries on random rays through the scene's
+/// bounds (origins uniform in the bounds, directions uniform), on the current
+/// rayon pool: the ray-casting throughput alone.
+pub fn ray_cast_rate(scene: &Scene, rays: u64, seed: u64) -> f64 {
+    let start = Instant::now();
+    let (lo, hi) = (scene.bounds.min, scene.bounds.max);
+    let hits: u64 = (0..rays)
+        .into_par_iter()
+        .map(|k| {
+            let mut s = Sampler::new(seed, k);
+            let o = lo + (hi - lo) * DVec3::new(s.next_f64(), s.next_f64(), s.next_f64());
+            let z = 1.0 - 2.0 * s.next_f64();
+            let phi = std::f64::consts::TAU * s.next_f64();
+            let r = (1.0 - z * z).sqrt();
+            let d = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+            scene.closest_hit(o, d, f64::INFINITY, None).is_some() as u64
+        })
+        .sum();
+    std::hint::black_box(hits);
+    rays as f64 / start.elapsed().as_secs_f64().max(1e-9)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::passes;
+
+    #[test]
+    fn pass_schedule_covers_all_samples() {
+        for spp in [1, 2, 3, 7, 64, 100] {
+            let p = passes(spp);
+            assert_eq!(p[0].0, 0);
+            assert_eq!(p.last().unwrap().1, spp);
+            assert!(p.windows(2).all(|w| w[0].1 == w[1].0));
+        }
+    }
+}

@@ -1,0 +1,280 @@
+//! A loaded, validated 3D scene ready for ray casting.
+//!
+//! [`Scene::load`] (a file; OBJ paths are relative to its folder) and
+//! [`Scene::from_json`] reject malformed JSON, unknown fields and invalid values with
+//! an error naming the file, the JSON path and the problem, never a panic.
+
+use super::bvh::{Aabb, Bvh};
+use super::camera::Camera;
+use super::medium::{Medium, Region};
+use super::mesh::{self, Hit, Triangle};
+use super::scene_desc::{LightDesc, RegionDesc, SceneDesc};
+use super::validate::{Problem, validate};
+use crate::core::color::{Rgb, luminance};
+pub use crate::flatland::scene::SceneError;
+use glam::DVec3;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// A shape's diffuse material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    pub reflectance: Rgb,
+    /// Radiance, W m⁻² sr⁻¹.
+    pub emission: Rgb,
+    pub two_sided: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    pub position: DVec3,
+    /// W sr⁻¹.
+    pub intensity: Rgb,
+}
+
+/// A distant light: a delta direction when `cos_max == 1`, else a uniform cone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Unit direction *towards* the sun (−direction of travel).
+    pub to_sun: DVec3,
+    /// W m⁻² on a plane facing the sun.
+    pub irradiance: Rgb,
+    /// Cosine of the angular radius.
+    pub cos_max: f64,
+    /// Radiance inside the cone, E / (π sin²α) (0 for a delta sun).
+    pub radiance: Rgb,
+}
+
+impl Sun {
+    pub fn is_delta(&self) -> bool {
+        self.cos_max >= 1.0
+    }
+    /// Solid angle of the cone, 2π(1 − cos α).
+    pub fn solid_angle(&self) -> f64 {
+        2.0 * PI * (1.0 - self.cos_max)
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub desc: SceneDesc,
+    pub source: String,
+    pub camera: Camera,
+    pub triangles: Vec<Triangle>,
+    pub bvh: Bvh,
+    /// One per shape, indexed by `Triangle::shape`.
+    pub surfaces: Vec<Surface>,
+    pub point_lights: Vec<PointLight>,
+    pub suns: Vec<Sun>,
+    /// Total constant sky radiance (zero: no sky).
+    pub sky: Rgb,
+    /// Emissive triangles and the CDF used to pick one for NEE (∝ luminance × area).
+    pub emitters: Vec<u32>,
+    pub emitter_cdf: Vec<f64>,
+    pub medium: Option<Medium>,
+    pub bounds: Aabb,
+    /// Length scale: diagonal of everything placed in the scene.
+    pub scale: f64,
+}
+
+/// Radius of the world sphere (around the scene's centre) where unbounded media
+/// end, in scene sizes (as `flatland::Scene::WORLD_RADIUS`).
+pub const WORLD_RADIUS: f64 = 1e3;
+
+impl Scene {
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+            file: file.clone(),
+            message: e.to_string(),
+        })?;
+        Self::from_json(&text, &file, path.parent().unwrap_or(Path::new(".")))
+    }
+
+    /// Parse, validate and build; `file` names the source in errors, `base` is the
+    /// folder mesh paths are relative to.
+    pub fn from_json(text: &str, file: &str, base: &Path) -> Result<Scene, SceneError> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            invalid(
+                file,
+                if path == "." { "(document)".into() } else { path },
+                e.inner().to_string(),
+            )
+        })?;
+        Self::from_desc(desc, file, base)
+    }
+
+    pub fn from_desc(desc: SceneDesc, file: &str, base: &Path) -> Result<Scene, SceneError> {
+        let problems = validate(&desc);
+        if !problems.is_empty() {
+            return Err(SceneError::Invalid {
+                file: file.to_string(),
+                problems,
+            });
+        }
+        Self::build(desc, file, base)
+    }
+
+    fn build(desc: SceneDesc, file: &str, base: &Path) -> Result<Scene, SceneError> {
+        let v = |p: [f64; 3]| DVec3::from_array(p);
+        let rgb = |c: &super::scene_desc::Color| Rgb::from_array(c.0);
+        let mut triangles = Vec::new();
+        let mut surfaces = Vec::new();
+        for (i, s) in desc.shapes.iter().enumerate() {
+            let k = i as u32;
+            let tris = if let Some(q) = &s.quad {
+                mesh::quad(v(q.origin), v(q.u), v(q.v), k)
+            } else if let Some(b) = &s.cuboid {
+                mesh::cuboid(v(b.min), v(b.max), b.rotate_y_deg, k)
+            } else if let Some(m) = &s.mesh {
+                let scale = m.scale.map_or(DVec3::ONE, |c| rgb(&c));
+                let translate = m.translate.map_or(DVec3::ZERO, v);
+                mesh::load_obj(&base.join(&m.path), scale, translate, k)
+                    .map_err(|e| invalid(file, format!("shapes[{i}].mesh.path"), e))?
+            } else {
+                unreachable!("validated: one geometry per shape")
+            };
+            triangles.extend(tris);
+            surfaces.push(Surface {
+                reflectance: rgb(&s.reflectance),
+                emission: rgb(&s.emission),
+                two_sided: s.two_sided,
+            });
+        }
+        let mut bounds = Aabb::EMPTY;
+        triangles.iter().flat_map(|t| t.vertices()).for_each(|p| bounds.grow(p));
+        bounds.grow(v(desc.camera.position));
+        let (mut point_lights, mut suns, mut sky) = (Vec::new(), Vec::new(), Rgb::ZERO);
+        for l in &desc.lights {
+            match l {
+                LightDesc::Point(p) => {
+                    bounds.grow(v(p.position));
+                    point_lights.push(PointLight {
+                        position: v(p.position),
+                        intensity: rgb(&p.intensity),
+                    });
+                }
+                LightDesc::Sun(s) => {
+                    let a = s.angular_radius_deg.to_radians();
+                    let e = rgb(&s.irradiance);
+                    suns.push(Sun {
+                        to_sun: -v(s.direction).normalize(),
+                        irradiance: e,
+                        cos_max: if a > 0.0 { a.cos() } else { 1.0 },
+                        radiance: if a > 0.0 { e / (PI * a.sin().powi(2)) } else { Rgb::ZERO },
+                    });
+                }
+                LightDesc::Sky(s) => sky += rgb(&s.radiance),
+            }
+        }
+        let medium = desc.medium.as_ref().map(|m| {
+            let region = match &m.region {
+                RegionDesc::Everywhere => Region::Everywhere,
+                RegionDesc::Box(b) => {
+                    bounds.grow(v(b.min));
+                    bounds.grow(v(b.max));
+                    Region::Box {
+                        min: v(b.min),
+                        max: v(b.max),
+                    }
+                }
+            };
+            Medium::new(rgb(&m.sigma_a), rgb(&m.sigma_s), m.g, region)
+        });
+        // A medium that neither scatters nor absorbs costs nothing: drop it.
+        let medium = medium.filter(|m| m.sigma_t.max_element() > 0.0);
+        let emitters: Vec<u32> = (0..triangles.len() as u32)
+            .filter(|&i| surfaces[triangles[i as usize].shape as usize].emission.max_element() > 0.0)
+            .collect();
+        let weights: Vec<f64> = emitters
+            .iter()
+            .map(|&i| {
+                let t = &triangles[i as usize];
+                let e = surfaces[t.shape as usize].emission;
+                luminance(e).max(1e-3 * e.max_element()) * t.area
+            })
+            .collect();
+        let total: f64 = weights.iter().sum();
+        let emitter_cdf = weights
+            .iter()
+            .scan(0.0, |acc, w| {
+                *acc += w / total;
+                Some(*acc)
+            })
+            .collect();
+        let r = &desc.render;
+        let camera = Camera::new(
+            v(desc.camera.position),
+            v(desc.camera.look_at),
+            v(desc.camera.up),
+            desc.camera.fov_deg,
+            r.resolution[0] as usize,
+            r.resolution[1] as usize,
+        );
+        let scale = (bounds.max - bounds.min).length().max(1e-6);
+        Ok(Scene {
+            bvh: Bvh::build(&triangles),
+            desc,
+            source: file.to_string(),
+            camera,
+            triangles,
+            surfaces,
+            point_lights,
+            suns,
+            sky,
+            emitters,
+            emitter_cdf,
+            medium,
+            bounds,
+            scale,
+        })
+    }
+
+    /// Ray offsets guarding against self-intersection (relative to the scene size).
+    #[inline]
+    pub fn t_min(&self) -> f64 {
+        1e-9 * self.scale
+    }
+
+    #[inline]
+    pub fn closest_hit(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> Option<Hit> {
+        self.bvh.closest_hit(&self.triangles, o, d, self.t_min(), t_max, skip)
+    }
+
+    #[inline]
+    pub fn occluded(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> bool {
+        self.bvh.occluded(&self.triangles, o, d, self.t_min(), t_max, skip)
+    }
+
+    pub fn surface(&self, tri: u32) -> &Surface {
+        &self.surfaces[self.triangles[tri as usize].shape as usize]
+    }
+
+    /// Distance along p + t·d to the world sphere (0 outside it).
+    pub fn world_exit(&self, p: DVec3, d: DVec3) -> f64 {
+        let c = 0.5 * (self.bounds.min + self.bounds.max);
+        let r = WORLD_RADIUS * self.scale;
+        let o = p - c;
+        let b = o.dot(d);
+        let disc = b * b - (o.length_squared() - r * r);
+        if disc <= 0.0 { 0.0 } else { (-b + disc.sqrt()).max(0.0) }
+    }
+
+    /// Probability of picking emitter number `k` (index into `emitters`).
+    pub fn emitter_probability(&self, k: usize) -> f64 {
+        self.emitter_cdf[k] - if k == 0 { 0.0 } else { self.emitter_cdf[k - 1] }
+    }
+
+    pub fn medium_at(&self, p: DVec3) -> Option<&Medium> {
+        self.medium.as_ref().filter(|m| m.contains(p))
+    }
+}
+
+fn invalid(file: &str, path: String, message: String) -> SceneError {
+    SceneError::Invalid {
+        file: file.to_string(),
+        problems: vec![Problem { path, message }],
+    }
+}
