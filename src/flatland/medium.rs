@@ -35,30 +35,14 @@ pub struct Medium {
     pub sigma_t: Rgb,
     pub phase: Hg2,
     pub region: Region,
-    grey: bool,
 }
 
-/// Outcome of free-flight sampling along a ray up to the next surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Flight {
-    /// A real scattering event at distance `t`; `weight` = T σ_s / pdf (per channel).
-    Scatter { t: f64, weight: Rgb },
-    /// The ray reaches the surface (or infinity); `weight` = T / P(pass).
-    Pass { weight: Rgb },
-}
+pub use crate::core::free_flight::Flight;
 
 impl Medium {
     pub fn new(sigma_a: Rgb, sigma_s: Rgb, g: f64, region: Region) -> Self {
         let sigma_t = sigma_a + sigma_s;
-        let grey = sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z;
-        Medium {
-            sigma_a,
-            sigma_s,
-            sigma_t,
-            phase: Hg2::new(g),
-            region,
-            grey,
-        }
+        Medium { sigma_a, sigma_s, sigma_t, phase: Hg2::new(g), region }
     }
 
     /// Is `p` inside the medium's region?
@@ -125,45 +109,7 @@ impl Medium {
 
     /// Sample the distance to the next real scattering event before `t_max`.
     pub fn sample_flight(&self, o: DVec2, d: DVec2, t_max: f64, s: &mut Sampler) -> Flight {
-        let channel = if self.grey { 0 } else { s.next_index(3) };
-        let sig_c = self.sigma_t[channel];
-        let u = s.next_f64();
-        if sig_c <= 0.0 {
-            // The drawn channel never scatters: pass with the MIS weight.
-            return self.pass(o, d, t_max);
-        }
-        let tau = -(1.0 - u).ln() / sig_c; // medium length to travel
-        let mut walked = 0.0;
-        for (a, b) in self.intervals(o, d, t_max) {
-            let len = b - a;
-            if walked + len > tau {
-                let t = a + (tau - walked);
-                let tr = transmittance(self.sigma_t, tau);
-                let weight = if self.grey {
-                    self.sigma_s / self.sigma_t
-                } else {
-                    let pdf = (self.sigma_t * tr).element_sum() / 3.0;
-                    tr * self.sigma_s / pdf
-                };
-                return Flight::Scatter { t, weight };
-            }
-            walked += len;
-        }
-        if self.grey {
-            Flight::Pass { weight: Rgb::ONE }
-        } else {
-            let tr = transmittance(self.sigma_t, walked);
-            Flight::Pass {
-                weight: tr / (tr.element_sum() / 3.0),
-            }
-        }
-    }
-
-    fn pass(&self, o: DVec2, d: DVec2, t_max: f64) -> Flight {
-        let tr = transmittance(self.sigma_t, self.length_inside(o, d, t_max));
-        Flight::Pass {
-            weight: tr / (tr.element_sum() / 3.0).max(f64::MIN_POSITIVE),
-        }
+        crate::core::free_flight::sample_flight(self.sigma_t, self.sigma_s, self.intervals(o, d, t_max), s)
     }
 }
 

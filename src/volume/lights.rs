@@ -64,18 +64,7 @@ impl Lobe {
     }
 }
 
-/// Power heuristic weight of strategy `a` against `b`.
-#[inline]
-pub fn power_heuristic(a: f64, b: f64) -> f64 {
-    let (a2, b2) = (a * a, b * b);
-    if a2.is_infinite() {
-        1.0
-    } else if a2 + b2 > 0.0 {
-        a2 / (a2 + b2)
-    } else {
-        0.0
-    }
-}
+pub use crate::core::mis::power_heuristic;
 
 /// Transmittance along p + t·w for t in [0, dist] (one in vacuum).
 #[inline]

@@ -26,17 +26,9 @@ pub struct Medium {
     pub sigma_t: Rgb,
     pub phase: Hg3,
     pub region: Region,
-    grey: bool,
 }
 
-/// Outcome of free-flight sampling along a ray up to the next surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Flight {
-    /// A real scattering event at distance `t`; `weight` = T σ_s / pdf per channel.
-    Scatter { t: f64, weight: Rgb },
-    /// The ray reaches the surface (or the end of the world); `weight` = T / P(pass).
-    Pass { weight: Rgb },
-}
+pub use crate::core::free_flight::Flight;
 
 impl Medium {
     pub fn new(sigma_a: Rgb, sigma_s: Rgb, g: f64, region: Region) -> Self {
@@ -47,7 +39,6 @@ impl Medium {
             sigma_t,
             phase: Hg3::new(g),
             region,
-            grey: sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z,
         }
     }
 
@@ -92,32 +83,7 @@ impl Medium {
 
     /// Sample the distance to the next real scattering event before `t_max`.
     pub fn sample_flight(&self, o: DVec3, d: DVec3, t_max: f64, s: &mut Sampler) -> Flight {
-        let channel = if self.grey { 0 } else { s.next_index(3) };
-        let sig_c = self.sigma_t[channel];
-        let u = s.next_f64();
-        let Some((a, b)) = self.interval(o, d, t_max) else {
-            return Flight::Pass { weight: Rgb::ONE };
-        };
-        let len = b - a;
-        if sig_c > 0.0 {
-            let tau = -(1.0 - u).ln() / sig_c; // medium length to travel
-            if tau < len {
-                let weight = if self.grey {
-                    self.sigma_s / self.sigma_t
-                } else {
-                    let tr = transmittance(self.sigma_t, tau);
-                    tr * self.sigma_s / ((self.sigma_t * tr).element_sum() / 3.0)
-                };
-                return Flight::Scatter { t: a + tau, weight };
-            }
-        }
-        if self.grey {
-            return Flight::Pass { weight: Rgb::ONE };
-        }
-        let tr = transmittance(self.sigma_t, len);
-        Flight::Pass {
-            weight: tr / (tr.element_sum() / 3.0).max(f64::MIN_POSITIVE),
-        }
+        crate::core::free_flight::sample_flight(self.sigma_t, self.sigma_s, self.interval(o, d, t_max), s)
     }
 }
 
