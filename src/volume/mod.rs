@@ -7,11 +7,15 @@
 
 pub mod bvh;
 pub mod camera;
+pub mod derivatives;
 pub mod lights;
 pub mod medium;
 pub mod mesh;
+pub mod probe;
+pub mod proxy;
 pub mod render;
 pub mod scene;
 pub mod scene_desc;
+pub mod sphere;
 pub mod transport;
 pub mod validate;

@@ -1,0 +1,205 @@
+//! Stratified directions over the unit sphere and their triangulation (issue 6 §4).
+//!
+//! Directions: a spherical Fibonacci set, z_k = 1 − 2(k + ½ + j·(ξ − ½))/N (equal-area
+//! bands in z), φ_k = 2π frac(k/Φ) + j·(ξ' − ½)·2π/√N, with jitter amount j ∈ [0, 1]
+//! drawn per (seed, k).
+//!
+//! Triangulation (spade): the direction nearest the south pole, P*, is the pole of a
+//! stereographic projection (x, y, z) ↦ (x, y)/(1 + z) of all other directions; their
+//! planar Delaunay triangulation is the convex hull of those points on the sphere
+//! (stereographic projection maps circles to circles), and the hole left around the
+//! south pole is closed by fanning the projected convex hull's edges to P*. P* is
+//! the projected point of largest radius, so it lies outside the hull of the others
+//! and the fan covers exactly the cap. Stereographic projection preserves
+//! orientation, so counter-clockwise planar faces are outward on the sphere
+//! ((v1 − v0) × (v2 − v0) points away from the centre).
+
+use crate::core::rng::Sampler;
+use glam::DVec3;
+use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
+use std::f64::consts::TAU;
+
+/// Directions and outward-oriented triangles (indices into `dirs`).
+#[derive(Clone, Debug)]
+pub struct SphereMesh {
+    pub dirs: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// N stratified unit directions (spherical Fibonacci, jittered by `jitter` ∈ [0, 1]).
+pub fn fibonacci_directions(n: usize, jitter: f64, seed: u64) -> Vec<DVec3> {
+    let golden = (1.0 + 5f64.sqrt()) * 0.5;
+    let nf = n as f64;
+    let dphi = TAU / nf.sqrt();
+    (0..n)
+        .map(|k| {
+            let mut s = Sampler::new2(seed, 0x5f3e_7e2e, k as u64);
+            let (u, v) = if jitter > 0.0 {
+                (s.next_f64() - 0.5, s.next_f64() - 0.5)
+            } else {
+                (0.0, 0.0)
+            };
+            let z = (1.0 - 2.0 * (k as f64 + 0.5 + jitter * u) / nf).clamp(-1.0, 1.0);
+            let phi = TAU * (k as f64 / golden).fract() + jitter * v * dphi;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            DVec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Projected {
+    p: Point2<f64>,
+    index: u32,
+}
+
+impl HasPosition for Projected {
+    type Scalar = f64;
+    fn position(&self) -> Point2<f64> {
+        self.p
+    }
+}
+
+/// Errors of the triangulation (degenerate input).
+#[derive(Debug, thiserror::Error)]
+pub enum SphereError {
+    #[error("need at least 4 directions, got {0}")]
+    TooFew(usize),
+    #[error("spade insertion failed: {0:?}")]
+    Insertion(spade::InsertionError),
+    #[error("duplicate directions merged by the triangulation ({0} of {1} kept)")]
+    Duplicates(usize, usize),
+}
+
+/// Triangulate unit directions on the sphere (see the module docs).
+pub fn triangulate(dirs: &[DVec3]) -> Result<Vec<[u32; 3]>, SphereError> {
+    let n = dirs.len();
+    if n < 4 {
+        return Err(SphereError::TooFew(n));
+    }
+    // P*: the direction nearest the south pole (0, 0, −1).
+    let pole = (0..n)
+        .min_by(|&a, &b| dirs[a].z.total_cmp(&dirs[b].z))
+        .expect("non-empty");
+    let pts: Vec<Projected> = (0..n)
+        .filter(|&k| k != pole)
+        .map(|k| {
+            let d = dirs[k];
+            let w = 1.0 / (1.0 + d.z);
+            Projected {
+                p: Point2::new(d.x * w, d.y * w),
+                index: k as u32,
+            }
+        })
+        .collect();
+    let dt = DelaunayTriangulation::<Projected>::bulk_load(pts).map_err(SphereError::Insertion)?;
+    if dt.num_vertices() != n - 1 {
+        return Err(SphereError::Duplicates(dt.num_vertices() + 1, n));
+    }
+    let mut tris: Vec<[u32; 3]> = dt.inner_faces().map(|f| f.vertices().map(|v| v.data().index)).collect();
+    // Hull edges run clockwise around the triangulation: the interior is on their
+    // right, P* on their left, so (from, to, P*) is counter-clockwise.
+    for e in dt.convex_hull() {
+        let [a, b] = e.vertices().map(|v| v.data().index);
+        tris.push([a, b, pole as u32]);
+    }
+    Ok(tris)
+}
+
+/// Directions and their triangulation.
+pub fn sphere_mesh(n: usize, jitter: f64, seed: u64) -> Result<SphereMesh, SphereError> {
+    let dirs = fibonacci_directions(n, jitter, seed);
+    let triangles = triangulate(&dirs)?;
+    Ok(SphereMesh { dirs, triangles })
+}
+
+/// Signed solid angle of the spherical triangle of unit vectors (a, b, c) (Van
+/// Oosterom–Strackee), positive when counter-clockwise seen from outside.
+pub fn solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let num = a.dot(b.cross(c));
+    let den = 1.0 + a.dot(b) + a.dot(c) + b.dot(c);
+    2.0 * num.atan2(den)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::triangle::triangle_form_factor;
+    use std::collections::HashMap;
+    use std::f64::consts::PI;
+
+    fn check(n: usize, jitter: f64, seed: u64) {
+        let m = sphere_mesh(n, jitter, seed).unwrap();
+        // Coverage: every triangle positively oriented, solid angles summing to 4π.
+        let mut sum = 0.0;
+        let mut min: f64 = f64::INFINITY;
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| m.dirs[i as usize]);
+            let o = solid_angle(a, b, c);
+            min = min.min(o);
+            sum += o;
+        }
+        assert!(
+            min > 0.0,
+            "n={n} jitter={jitter}: a triangle is inverted or degenerate ({min:e})"
+        );
+        assert!(((sum - 4.0 * PI) / (4.0 * PI)).abs() < 1e-9, "n={n}: Σ Ω = {sum}");
+        // The same with the core's form factor from the centre.
+        let core_sum: f64 = m
+            .triangles
+            .iter()
+            .map(|t| triangle_form_factor(t.map(|i| m.dirs[i as usize]), DVec3::ZERO).value)
+            .sum();
+        assert!(
+            ((core_sum - 4.0 * PI) / (4.0 * PI)).abs() < 1e-9,
+            "n={n}: core Σ Ω = {core_sum}"
+        );
+        // Closed manifold: every undirected edge in exactly two triangles, once each way.
+        let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+        for t in &m.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                *edges.entry(key).or_default() += if a < b { 1 } else { -1 };
+            }
+        }
+        let mut counts: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in &m.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *counts.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        assert!(
+            counts.values().all(|&c| c == 2),
+            "n={n}: an edge is not shared by exactly two triangles"
+        );
+        assert!(edges.values().all(|&c| c == 0), "n={n}: inconsistent orientation");
+        let (v, e, f) = (m.dirs.len() as i64, counts.len() as i64, m.triangles.len() as i64);
+        assert_eq!(v - e + f, 2, "n={n}: Euler characteristic");
+        assert_eq!(f, 2 * v - 4);
+    }
+
+    #[test]
+    fn covers_the_sphere_exactly_once() {
+        for n in [64, 256, 4096, 65536] {
+            check(n, 0.0, 1);
+        }
+    }
+
+    #[test]
+    fn covers_the_sphere_exactly_once_jittered() {
+        for (n, seed) in [(64, 1), (256, 2), (4096, 3), (65536, 4), (16384, 5), (100, 6)] {
+            check(n, 1.0, seed);
+        }
+    }
+
+    #[test]
+    fn directions_are_unit_and_stratified() {
+        let d = fibonacci_directions(4096, 1.0, 9);
+        assert!(d.iter().all(|v| (v.length() - 1.0).abs() < 1e-12));
+        // Equal-area bands: mean z near zero, each hemisphere half the points.
+        let up = d.iter().filter(|v| v.z > 0.0).count();
+        assert_eq!(up, 2048);
+    }
+}
