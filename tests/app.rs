@@ -5,9 +5,14 @@ use eframe::egui;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use glam::DVec2;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
+use volcache::app::compare::{CompareKey, CompareParams, METHODS, compare_command, spawn_compare};
+use volcache::app::jobs::no_notify;
 use volcache::app::overlay::Overlay;
 use volcache::app::{Document, Workbench, install_fonts};
+use volcache::flatland::cached_field::CacheMethod;
+use volcache::flatland::field::FieldParams;
 use volcache::flatland::scene::Scene;
 use volcache::flatland::scene_desc::Quantity;
 
@@ -19,6 +24,17 @@ fn workbench() -> Workbench {
     let m = &mut wb.method;
     (m.rays, m.steps, m.ref_spp, m.grid, m.grid_rays) = (96, 4, 64, 4, 24);
     wb
+}
+
+/// A comparison small enough for tests (12×12, a handful of records).
+fn tiny_compare(wb: &mut Workbench) {
+    wb.compare_params = CompareParams {
+        caches: 6,
+        rays: 24,
+        steps: 2,
+        res: Some([12, 12]),
+        ref_spp: 4,
+    };
 }
 
 fn harness(wb: Workbench) -> Harness<'static, Workbench> {
@@ -280,4 +296,260 @@ fn without_a_display_the_app_names_the_headless_commands() {
         "{err}"
     );
     assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn a_compare_run_finishes_with_finite_numbers_for_both_methods() {
+    let mut wb = workbench();
+    tiny_compare(&mut wb);
+    let mut h = harness(wb);
+    h.step();
+    assert_eq!(h.state().compare_starts(), 0, "nothing computed until asked");
+    h.get_by_label("Compare view").click();
+    h.step();
+    assert!(h.state().show_compare);
+    h.run_steps(3); // a new window's first frame only measures it
+    h.get_by_label_contains("equal cache count: 6 records of 24 rays");
+    step_until(&mut h, "the comparison", |w| w.compare_done());
+    let res = h.state().compare_result().unwrap().clone();
+    assert_eq!((res.fp.width, res.fp.height), (12, 12));
+    for m in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+        let r = res.run(m).expect("both methods ran");
+        assert!(r.is_finite() && r.errors.rmse >= 0.0, "{r:?}");
+        assert!(!r.records.is_empty() && r.rays > 0);
+    }
+    h.run_steps(2);
+    // The numbers are on screen, one caption per method.
+    assert_eq!(h.query_all_by_label_contains("RMSE").count(), 2);
+    h.get_by_label_contains("compare done");
+    let command = h.state_mut().compare_command().unwrap();
+    assert_eq!(
+        command,
+        "volcache figure compare --caches 6 --rays 24 --steps 2 --res 12x12 --ref-spp 4 --seed 1 --out out/compare"
+    );
+    // The command reproduces the records and errors headless.
+    let dir = tempfile::tempdir().unwrap();
+    let mut args: Vec<String> = command.split_whitespace().skip(1).map(String::from).collect();
+    let out = args.iter().position(|a| a == "--out").unwrap() + 1;
+    args[out] = dir.path().join("out").display().to_string();
+    args.extend([
+        "--ref-cache".into(),
+        dir.path().join("rc").display().to_string(),
+        "--quiet".into(),
+    ]);
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_volcache"))
+        .args(&args)
+        .status()
+        .unwrap();
+    assert!(status.success(), "{command}");
+    let json = std::fs::read_to_string(dir.path().join("out/compare_occluder.json")).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    for (run, m) in report["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip([CacheMethod::Ours, CacheMethod::Jarosz08])
+    {
+        let app = res.run(m).unwrap();
+        assert_eq!(run["records"].as_u64(), Some(app.records.len() as u64), "{m:?}");
+        let rmse = run["errors"]["rmse"].as_f64().unwrap();
+        assert!(
+            (rmse - app.errors.rmse).abs() <= 1e-12 * rmse.abs().max(1e-300),
+            "{m:?}: {rmse} vs {}",
+            app.errors.rmse
+        );
+    }
+    // A parameter change restarts it; closing the window stops it.
+    h.state_mut().compare_params.caches = 7;
+    h.step();
+    assert_eq!(h.state().compare_starts(), 2);
+    h.get_by_label("Compare view").click();
+    h.step();
+    assert!(!h.state().show_compare && h.state().compare_starts() == 2);
+}
+
+#[test]
+fn toggling_the_records_and_error_overlays_changes_what_is_drawn() {
+    let mut wb = workbench();
+    tiny_compare(&mut wb);
+    let mut h = harness(wb);
+    step_until(&mut h, "the field", |w| w.field_converged());
+    let base = h.state().shapes_drawn;
+    h.get_by_label("Cache records").click();
+    h.step();
+    assert!(h.state().overlays.is_on(Overlay::Records));
+    step_until(&mut h, "the comparison", |w| w.compare_done());
+    h.run_steps(2);
+    let ours = h
+        .state()
+        .compare_result()
+        .unwrap()
+        .run(CacheMethod::Ours)
+        .unwrap()
+        .records
+        .len();
+    let with_records = h.state().shapes_drawn;
+    assert!(with_records > base, "{with_records} vs {base}");
+    assert!(with_records - base <= ours, "at most a shape per record");
+    // The other method's records.
+    h.state_mut().overlay_method = CacheMethod::Jarosz08;
+    h.run_steps(2);
+    let jarosz = h
+        .state()
+        .compare_result()
+        .unwrap()
+        .run(CacheMethod::Jarosz08)
+        .unwrap()
+        .records
+        .len();
+    assert!(h.state().shapes_drawn > base && h.state().shapes_drawn - base <= jarosz);
+    // The error map is one more layer.
+    let before = h.state().shapes_drawn;
+    h.get_by_label("Error map").click();
+    h.run_steps(2);
+    assert_eq!(h.state().shapes_drawn, before + 1);
+    h.get_by_label("Error map").click();
+    h.get_by_label("Cache records").click();
+    h.run_steps(2);
+    assert_eq!(h.state().shapes_drawn, base);
+}
+
+// The compare view's state logic, apart from the UI.
+#[test]
+fn params_follow_the_app_resolution_unless_set() {
+    let scene = Scene::default_scene();
+    let mut app = FieldParams::from_scene(&scene);
+    app.seed = 7;
+    app.omega_o_deg = 33.0; // app-only display choice: the comparison keeps the scene's
+    let p = CompareParams::default();
+    let fp = p.field_params(&scene, &app);
+    assert_eq!((fp.width, fp.height, fp.seed), (app.width / 2, app.height / 2, 7));
+    assert_eq!(fp.omega_o_deg, FieldParams::from_scene(&scene).omega_o_deg);
+    let fixed = CompareParams {
+        res: Some([40, 0]),
+        ..p.clone()
+    };
+    let fp2 = fixed.field_params(&scene, &app);
+    assert_eq!((fp2.width, fp2.height), (40, 1));
+    let rp = p.reference_params(&fp);
+    assert_eq!((rp.spp, rp.seed), (256, 7 ^ 0x5EED));
+    let cs = p.cache_settings(CacheMethod::Jarosz08, 7);
+    assert_eq!((cs.probe.rays, cs.probe.steps, cs.seed), (512, 16, 7));
+    assert_eq!(
+        compare_command(Some("a b.json"), &fp, &p, "out/compare"),
+        "volcache figure compare 'a b.json' --caches 150 --rays 512 --steps 16 --res 128x128 \
+         --ref-spp 256 --seed 7 --out out/compare"
+    );
+}
+
+#[test]
+fn a_tiny_comparison_runs_both_methods() {
+    let scene = Arc::new(Scene::default_scene());
+    let params = CompareParams {
+        caches: 6,
+        rays: 24,
+        steps: 2,
+        res: Some([12, 12]),
+        ref_spp: 4,
+    };
+    let key = CompareKey {
+        revision: 0,
+        fp: params.field_params(&scene, &FieldParams::from_scene(&scene)),
+        params,
+    };
+    let job = spawn_compare(scene, &key, no_notify());
+    let t = std::time::Instant::now();
+    while job.is_running() {
+        assert!(t.elapsed().as_secs() < 60, "compare did not finish");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let got = job.poll();
+    assert_eq!(got.len(), 3, "reference, then each method");
+    let last = got.last().unwrap();
+    assert!(last.is_complete() && got[0].runs.is_empty());
+    for m in METHODS {
+        let run = last.run(m).unwrap();
+        assert!(run.is_finite() && !run.records.is_empty(), "{run:?}");
+    }
+}
+
+#[test]
+fn compare_state_runs_only_when_needed_and_restarts_on_change() {
+    let mut wb = workbench();
+    (wb.field_params.width, wb.field_params.height) = (8, 8);
+    wb.compare_params = CompareParams {
+        caches: 4,
+        rays: 8,
+        steps: 1,
+        res: Some([8, 8]),
+        ref_spp: 2,
+    };
+    wb.tick();
+    assert_eq!(wb.compare_starts(), 0, "closed and no overlay: nothing");
+    wb.overlays.set(Overlay::Records, true);
+    wb.tick();
+    assert_eq!(wb.compare_starts(), 1, "the records overlay needs it");
+    wb.overlays.set(Overlay::Records, false);
+    wb.show_compare = true;
+    wb.tick();
+    assert_eq!(wb.compare_starts(), 1, "same key: no restart");
+    // The app's resolution matters only without an explicit compare resolution.
+    wb.field_params.width = 10;
+    wb.tick();
+    assert_eq!(wb.compare_starts(), 1);
+    wb.compare_params.res = None;
+    wb.tick();
+    assert_eq!(wb.compare_starts(), 2);
+    assert_eq!(wb.compare_key().fp.width, 5);
+    let old = wb.compare_watch().unwrap();
+    wb.compare_params.caches = 5;
+    wb.tick();
+    assert_eq!(wb.compare_starts(), 3);
+    assert!(old.is_cancel_requested());
+    wb.doc.edit("g", |d| d.medium.as_mut().unwrap().g = 0.3).unwrap();
+    wb.tick();
+    assert_eq!(wb.compare_starts(), 4, "a scene edit restarts it");
+    // Closing stops a running comparison.
+    let running = wb.compare_watch().unwrap();
+    wb.show_compare = false;
+    wb.tick();
+    assert!(running.is_cancel_requested() || !running.is_running());
+}
+
+#[test]
+fn record_outlines_lie_on_their_extents_and_skip_what_is_not_shown() {
+    use volcache::app::overlay::{record_outline, record_shapes, records_scale};
+    use volcache::app::view::{ViewState, Xform};
+    use volcache::figure::RecordColor;
+    use volcache::flatland::cached_field::RecordInfo;
+    let rect = egui::Rect::from_min_size(egui::pos2(0.0, 0.0), egui::vec2(400.0, 400.0));
+    let xf = Xform::new(rect, DVec2::splat(-1.0), DVec2::splat(1.0), &ViewState::default());
+    let a0 = DVec2::new(1.0, 1.0).normalize();
+    let record = |at: DVec2, radii: [f64; 2]| RecordInfo {
+        position: at,
+        axes: [a0, a0.perp()],
+        radii,
+        luminance: radii[0],
+        rays: 10,
+    };
+    let r = record(DVec2::new(0.1, 0.2), [0.3, 0.1]);
+    let pts = record_outline(&r, &xf, rect, 64).unwrap();
+    assert_eq!(pts.len(), 64);
+    for p in pts {
+        let w = xf.to_world(p) - r.position;
+        let q = (w.dot(a0) / 0.3).powi(2) + (w.dot(a0.perp()) / 0.1).powi(2);
+        assert!((q - 1.0).abs() < 1e-2, "{q}");
+    }
+    assert!(record_outline(&record(DVec2::new(50.0, 0.0), [0.3, 0.1]), &xf, rect, 64).is_none());
+    assert!(record_outline(&record(DVec2::new(f64::NAN, 0.0), [0.3, 0.1]), &xf, rect, 64).is_none());
+    // Coloured by radius: small and large records differ; one shape per shown record.
+    let rs = [record(DVec2::ZERO, [0.05, 0.05]), record(DVec2::ZERO, [0.5, 0.5])];
+    let scale = records_scale(&[&rs], RecordColor::ByRadius);
+    let shapes = record_shapes(&rs, RecordColor::ByRadius, scale.as_ref(), &xf);
+    assert_eq!(shapes.len(), 2);
+    let color = |s: &egui::Shape| match s {
+        egui::Shape::Path(p) => format!("{:?}", p.stroke.color),
+        other => panic!("{other:?}"),
+    };
+    assert_ne!(color(&shapes[0]), color(&shapes[1]));
 }

@@ -87,6 +87,7 @@ impl Workbench {
     pub(super) fn canvas(&mut self, ui: &mut egui::Ui) {
         self.update_texture(ui.ctx());
         self.update_gradient_texture(ui.ctx());
+        self.update_compare_textures(ui.ctx());
         let rect = ui.available_rect_before_wrap();
         let resp = ui.allocate_rect(rect, Sense::click_and_drag());
         let scene = self.doc.scene().clone();
@@ -131,6 +132,23 @@ impl Workbench {
     fn draw_overlays(&self, painter: &egui::Painter, xf: &Xform) -> usize {
         let rect = xf.rect;
         let mut n = 0;
+        if self.overlays.is_on(Overlay::ErrorMap)
+            && let Some((tex, (lo, hi))) = self.error_overlay()
+        {
+            let r = xf.rect_of(self.doc.scene().domain_min, self.doc.scene().domain_max);
+            let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
+            painter.image(tex.id(), r, uv, Color32::WHITE);
+            n += 1;
+            let method = super::compare::method_label(self.overlay_method);
+            let text = format!("|error| of {method} vs reference: log viridis, {lo:.1e} … {hi:.1e}");
+            painter.text(
+                pos2(rect.left() + 8.0, rect.top() + 10.0),
+                Align2::LEFT_CENTER,
+                text,
+                FontId::proportional(11.0),
+                Color32::WHITE,
+            );
+        }
         if self.overlays.is_on(Overlay::Gradients)
             && let Some((tex, _, view)) = &self.gradient_tex
         {
@@ -150,6 +168,12 @@ impl Workbench {
                 font,
                 Color32::WHITE,
             );
+        }
+        if self.overlays.is_on(Overlay::Records) {
+            // Clipped to the domain, as `figure::draw_records` clips to its view.
+            let scene = self.doc.scene();
+            let domain = xf.rect_of(scene.domain_min, scene.domain_max).intersect(rect);
+            n += overlay::paint(painter, domain, self.record_overlay_shapes(xf));
         }
         if self.overlays.is_on(Overlay::Scene) {
             n += draw_scene(painter, xf, self.doc.desc(), self.hovered, self.selection);

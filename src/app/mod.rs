@@ -7,6 +7,8 @@
 //!   [`edit`]: picking and dragging handles, adding and deleting items;
 //! - [`jobs`]: background jobs and the cancel-and-restart policy ([`jobs::Slot`]);
 //!   [`compute`]: what the jobs compute (field levels, probe, reference, gradients);
+//!   [`compare`]: the compare view's computation (reference and caches at equal
+//!   count), [`compare_view`]: its window and the record / error overlays' data;
 //! - [`workbench`]: state and per-frame scheduling; [`canvas`], [`overlay`],
 //!   [`scene_draw`], [`view`]: the canvas; [`inspector`], [`readout`]: the probe
 //!   inspector; [`panels`], [`scene_panel`], [`toolbar`]: side panel, status bar,
@@ -15,6 +17,8 @@
 
 pub mod canvas;
 pub mod command;
+pub mod compare;
+pub mod compare_view;
 pub mod compute;
 pub mod document;
 pub mod edit;

@@ -1,12 +1,16 @@
-//! Canvas overlays, each toggled on its own. To add one (cache records and error
-//! maps, issue 4): add a variant to [`Overlay`] with its label, hold its data in the
+//! Canvas overlays, each toggled on its own. To add one: add a variant to [`Overlay`] with its label, hold its data in the
 //! workbench (usually a [`super::jobs::Slot`]), and draw it in
 //! `Workbench::draw_overlays` (canvas.rs) — the toggles list [`Overlay::ALL`].
 
 use super::compute::{GradientGrid, ProbeResult};
 use super::readout::{MethodReadout, extent_outline, part_of};
 use super::view::Xform;
-use crate::figure::{GradientSample, angle_color, gradient_color, magnitude_range, viridis};
+use crate::figure::{
+    ColorScale, FieldStyle, GradientSample, RECORD_BLUE, RecordColor, RecordStyle, angle_color, error_field,
+    field_to_rgba, gradient_color, magnitude_range, record_color_scale, viridis,
+};
+use crate::flatland::cached_field::RecordInfo;
+use crate::flatland::field::Field;
 use crate::flatland::proxy::ElementKind;
 use crate::flatland::scene_desc::Part;
 use eframe::egui::{Color32, ColorImage, Painter, Pos2, Rect, Shape, Stroke, Vec2, vec2};
@@ -44,15 +48,22 @@ pub enum Overlay {
     ProbeElements,
     /// The cache extents of the methods at the probe.
     Extents,
+    /// The records of the compare view's method: ellipses (ours) or circles
+    /// (Jarosz 2008), coloured by a record attribute.
+    Records,
+    /// |error| of the compare view's method against its reference (log viridis).
+    ErrorMap,
 }
 
 impl Overlay {
-    pub const ALL: [Overlay; 5] = [
+    pub const ALL: [Overlay; 7] = [
         Overlay::Scene,
         Overlay::Gradients,
         Overlay::ProbeRays,
         Overlay::ProbeElements,
         Overlay::Extents,
+        Overlay::Records,
+        Overlay::ErrorMap,
     ];
 
     pub fn label(self) -> &'static str {
@@ -62,11 +73,18 @@ impl Overlay {
             Overlay::ProbeRays => "Probe rays",
             Overlay::ProbeElements => "Proxy elements",
             Overlay::Extents => "Cache extents",
+            Overlay::Records => "Cache records",
+            Overlay::ErrorMap => "Error map",
         }
     }
 
     pub fn on_by_default(self) -> bool {
-        !matches!(self, Overlay::Gradients)
+        !matches!(self, Overlay::Gradients | Overlay::Records | Overlay::ErrorMap)
+    }
+
+    /// The overlay shows the compare view's results (which it needs computed).
+    pub fn needs_compare(self) -> bool {
+        matches!(self, Overlay::Records | Overlay::ErrorMap)
     }
 }
 
@@ -83,6 +101,11 @@ impl Default for Overlays {
 impl Overlays {
     pub fn is_on(&self, o: Overlay) -> bool {
         self.0.contains(&o)
+    }
+
+    /// Some overlay on needs the compare view's results.
+    pub fn need_compare(&self) -> bool {
+        self.0.iter().any(|o| o.needs_compare())
     }
 
     pub fn set(&mut self, o: Overlay, on: bool) {
@@ -292,6 +315,92 @@ pub fn extent_shapes(at: DVec2, readouts: &[MethodReadout], xf: &Xform) -> Vec<S
             Shape::line(pts, Stroke::new(2.0, method_color(r.name)))
         })
         .collect()
+}
+
+/// The shared colour scale of records coloured by `color` over every record list
+/// (the range of `figure compare`, so that radii compare across methods); None for
+/// uniform colours.
+pub fn records_scale(lists: &[&[RecordInfo]], color: RecordColor) -> Option<ColorScale> {
+    let all: Vec<RecordInfo> = lists.iter().flat_map(|l| l.iter().cloned()).collect();
+    let mut style = RecordStyle::colored(color);
+    style.range = record_color_scale(&all, &style).map(|s| (s.min, s.max));
+    record_color_scale(&all, &style)
+}
+
+/// Points of a record's extent on screen (c + u cos t + v sin t), or None if the
+/// record is unusable or lies wholly outside `clip`. Radii are capped at 10⁶ views.
+pub fn record_outline(r: &RecordInfo, xf: &Xform, clip: Rect, segments: usize) -> Option<Vec<Pos2>> {
+    let [r0, r1] = r.radii.map(|x| x.max(0.0));
+    if !(r.position.is_finite() && r0.is_finite() && r1.is_finite()) {
+        return None;
+    }
+    let cap = 1e6 * xf.to_world_len(xf.rect.width().max(xf.rect.height()));
+    let a0 = r.axes[0].try_normalize().unwrap_or(DVec2::X);
+    let a1 = r.axes[1].try_normalize().unwrap_or(a0.perp());
+    let (u, v) = (a0 * r0.min(cap), a1 * r1.min(cap));
+    let c = xf.to_screen(r.position);
+    let half = (u.length().max(v.length()) * xf.scale) as f32;
+    let bbox = Rect::from_center_size(c, Vec2::splat(2.0 * half));
+    if !bbox.intersects(clip) {
+        return None;
+    }
+    let n = segments.max(8);
+    Some(
+        (0..n)
+            .map(|k| {
+                let (s, co) = (std::f64::consts::TAU * k as f64 / n as f64).sin_cos();
+                xf.to_screen(r.position + u * co + v * s)
+            })
+            .collect(),
+    )
+}
+
+/// Records as outlines in the colours of `figure::draw_records` (uniform light
+/// blue, or the attribute through `scale`), with its automatic opacity; extents
+/// smaller than a pixel as dots.
+pub fn record_shapes(records: &[RecordInfo], color: RecordColor, scale: Option<&ColorScale>, xf: &Xform) -> Vec<Shape> {
+    let style = RecordStyle::colored(color);
+    let alpha = (255.0 * style.alpha_for(records.len())).round() as u8;
+    let mut shapes = Vec::with_capacity(records.len());
+    for r in records {
+        let c = match (color, scale) {
+            (RecordColor::Uniform(c), _) => c,
+            (_, Some(s)) => s.color(color.attribute(r).unwrap_or(0.0)),
+            (_, None) => RECORD_BLUE,
+        };
+        let ink = rgb(c, alpha);
+        let screen_r = (r.radii[0].max(0.0) * r.radii[1].max(0.0)).sqrt() * xf.scale;
+        if screen_r.is_finite() && screen_r < 1.0 {
+            if r.position.is_finite() && xf.rect.contains(xf.to_screen(r.position)) {
+                shapes.push(Shape::circle_filled(xf.to_screen(r.position), 1.0, ink));
+            }
+            continue;
+        }
+        let n = (screen_r * 0.5).clamp(16.0, 96.0) as usize;
+        if let Some(pts) = record_outline(r, xf, xf.rect.expand(2.0), n) {
+            shapes.push(Shape::closed_line(pts, Stroke::new(1.0, ink)));
+        }
+    }
+    shapes
+}
+
+/// The error field of `test` against `reference` (absolute luminance error, as
+/// `figure::error_field`) as an image on the log `range`: viridis where defined,
+/// transparent elsewhere (row 0 at the top).
+pub fn error_image(test: &Field, reference: &Field, range: (f64, f64)) -> ColorImage {
+    let e = error_field(test, reference, false);
+    let style = FieldStyle::FalseColor {
+        log: true,
+        range: Some(range),
+    };
+    let mut mapped = field_to_rgba(&e, &style);
+    // Same pixel order as the field's texture: clear the undefined pixels.
+    for (k, ok) in e.valid.iter().enumerate() {
+        if !ok {
+            mapped.rgba[4 * k + 3] = 0;
+        }
+    }
+    ColorImage::from_rgba_unmultiplied([e.width, e.height], &mapped.rgba)
 }
 
 /// The probe's marker: a ring with a cross.

@@ -183,6 +183,7 @@ impl Workbench {
             ui.radio_value(&mut self.gradient_aware, true, "aware (ours)");
             ui.radio_value(&mut self.gradient_aware, false, "unaware (Jarosz 2008)");
         });
+        self.compare_section(ui);
     }
 
     /// The scene argument of commands: the file if it holds what is shown, else a
@@ -272,12 +273,13 @@ impl Workbench {
     }
 
     pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
-        let mut cancel = [false; 4];
+        let mut cancel = [false; 5];
         ui.horizontal(|ui| {
             cancel[0] = job_status(ui, "field", self.field.job());
             cancel[1] = job_status(ui, "probe", self.probe_job.job());
             cancel[2] = job_status(ui, "reference", self.reference.job());
             cancel[3] = job_status(ui, "gradients", self.gradients.job());
+            cancel[4] = job_status(ui, "compare", self.compare.job());
         });
         if cancel[0] {
             self.field.cancel();
@@ -290,6 +292,9 @@ impl Workbench {
         }
         if cancel[3] {
             self.gradients.cancel();
+        }
+        if cancel[4] {
+            self.compare.cancel();
         }
         if let Some(m) = &self.message {
             let color = if m.error {

@@ -61,6 +61,8 @@ impl Workbench {
                     self.overlays.set(o, on);
                 }
             }
+            ui.separator();
+            ui.toggle_value(&mut self.show_compare, "Compare view");
         });
     }
 }

@@ -3,6 +3,7 @@
 //! revision and parameters, cancelling the stale ones; [`Workbench::ui`] lays out
 //! the panels (controls, canvas, inspector, status bar) around it.
 
+use super::compare::{CompareKey, CompareParams, CompareResult, spawn_compare};
 use super::compute::{
     FieldLevel, GradientGrid, MethodParams, ProbeResult, ReferenceResult, spawn_field, spawn_gradients, spawn_probe,
     spawn_reference,
@@ -12,7 +13,8 @@ use super::edit::{Handle, Selection};
 use super::jobs::{Notify, Slot, no_notify};
 use super::overlay::{Overlay, Overlays};
 use super::view::{ViewState, Xform};
-use crate::figure::ColorScale;
+use crate::figure::{ColorScale, RecordColor};
+use crate::flatland::cached_field::CacheMethod;
 use crate::flatland::field::FieldParams;
 use crate::flatland::probe::ProbeSettings;
 use crate::flatland::scene_desc::Part;
@@ -96,6 +98,17 @@ pub struct Workbench {
     pub(super) probe_job: Slot<ProbeKey, Arc<ProbeResult>>,
     pub(super) reference: Slot<ReferenceKey, Arc<ReferenceResult>>,
     pub(super) gradients: Slot<GradientKey, Arc<GradientGrid>>,
+    /// The compare view's parameters, whether it is open, and its job.
+    pub compare_params: CompareParams,
+    pub show_compare: bool,
+    /// The method whose records and error the overlays show.
+    pub overlay_method: CacheMethod,
+    /// What colours the records (overlay and compare view).
+    pub record_color: RecordColor,
+    pub(super) compare: Slot<CompareKey, Arc<CompareResult>>,
+    /// Textures of the compare view and the error overlay, for one result.
+    pub(super) compare_tex: Option<super::compare_view::CompareTextures>,
+    pub(super) compare_out: String,
     pub(super) texture: Option<(egui::TextureHandle, (usize, Display))>,
     pub(super) color_scale: Option<ColorScale>,
     /// The gradient overlay's texture, its key (grid, aware?, part) and arrows.
@@ -140,6 +153,13 @@ impl Workbench {
             probe_job: Slot::default(),
             reference: Slot::default(),
             gradients: Slot::default(),
+            compare_params: CompareParams::default(),
+            show_compare: false,
+            overlay_method: CacheMethod::Ours,
+            record_color: RecordColor::Uniform(crate::figure::RECORD_BLUE),
+            compare: Slot::default(),
+            compare_tex: None,
+            compare_out: "out/compare".into(),
             texture: None,
             color_scale: None,
             gradient_tex: None,
@@ -176,6 +196,42 @@ impl Workbench {
             && (self.probe.is_none() || self.probe_done())
             && (!self.want_reference || self.reference_done())
             && (!self.overlays.is_on(Overlay::Gradients) || self.gradients.is_done())
+            && (!self.compare_needed() || self.compare_done())
+    }
+
+    /// The compare view is open or an overlay shows its results.
+    pub fn compare_needed(&self) -> bool {
+        self.show_compare || self.overlays.need_compare()
+    }
+
+    /// What the comparison is computed for now.
+    pub fn compare_key(&self) -> CompareKey {
+        let scene = self.doc.scene();
+        CompareKey {
+            revision: self.doc.revision(),
+            fp: self.compare_params.field_params(scene, &self.field_params),
+            params: self.compare_params.clone(),
+        }
+    }
+
+    /// The latest comparison (possibly partial: reference first, then each method).
+    pub fn compare_result(&self) -> Option<&Arc<CompareResult>> {
+        self.compare.latest()
+    }
+
+    /// The comparison of the current key has every method.
+    pub fn compare_done(&self) -> bool {
+        self.compare.is_done() && self.compare_result().is_some_and(|r| r.is_complete())
+    }
+
+    /// A look at the current comparison job.
+    pub fn compare_watch(&self) -> Option<super::jobs::JobWatch> {
+        self.compare.job().map(|j| j.watch())
+    }
+
+    /// Comparison jobs started so far.
+    pub fn compare_starts(&self) -> u64 {
+        self.compare.starts
     }
 
     pub fn info(&mut self, text: impl Into<String>) {
@@ -266,6 +322,7 @@ impl Workbench {
         self.probe_job.update();
         self.reference.update();
         self.gradients.update();
+        self.compare.update();
         if self.doc.generation() != self.generation {
             // A different scene: its own render defaults, a fresh view, no probe.
             self.generation = self.doc.generation();
@@ -276,6 +333,7 @@ impl Workbench {
             (self.probe, self.selection, self.want_reference) = (None, None, false);
             self.field.reset(true);
             self.gradients.reset(true);
+            self.compare.reset(true);
             self.export_path = format!("out/{}_app.png", self.doc.stem());
         }
         let scene = self.doc.scene().clone();
@@ -343,6 +401,15 @@ impl Workbench {
         } else {
             self.gradients.reset(true);
         }
+
+        if self.compare_needed() {
+            let key = self.compare_key();
+            let spawn = || spawn_compare(scene.clone(), &key, notify.clone());
+            self.compare.ensure(key.clone(), spawn);
+        } else if self.compare.running().is_some() {
+            // Closed while computing: stop (the next opening starts anew).
+            self.compare.reset(false);
+        }
     }
 
     /// Some job is computing.
@@ -351,6 +418,7 @@ impl Workbench {
             || self.probe_job.running().is_some()
             || self.reference.running().is_some()
             || self.gradients.running().is_some()
+            || self.compare.running().is_some()
     }
 
     /// One frame of the whole window.
@@ -374,6 +442,7 @@ impl Workbench {
                 .show(ui, |ui| egui::ScrollArea::vertical().show(ui, |ui| self.inspector(ui)));
         }
         egui::CentralPanel::no_frame().show(ui, |ui| self.canvas(ui));
+        self.compare_window(ui.ctx());
         // Restart what this frame's edits made stale now, not a frame later.
         self.tick();
 

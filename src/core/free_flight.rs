@@ -30,7 +30,11 @@ pub fn sample_flight(
     let sig_c = sigma_t[channel];
     let u = s.next_f64();
     // Medium length to travel; the drawn channel never scatters when σ_t = 0.
-    let tau = if sig_c > 0.0 { -(1.0 - u).ln() / sig_c } else { f64::INFINITY };
+    let tau = if sig_c > 0.0 {
+        -(1.0 - u).ln() / sig_c
+    } else {
+        f64::INFINITY
+    };
     let mut walked = 0.0;
     for (a, b) in intervals {
         let len = b - a;
@@ -41,7 +45,10 @@ pub fn sample_flight(
                 let tr = transmittance(sigma_t, tau);
                 tr * sigma_s / ((sigma_t * tr).element_sum() / 3.0)
             };
-            return Flight::Scatter { t: a + (tau - walked), weight };
+            return Flight::Scatter {
+                t: a + (tau - walked),
+                weight,
+            };
         }
         walked += len;
     }
@@ -49,5 +56,7 @@ pub fn sample_flight(
         return Flight::Pass { weight: Rgb::ONE };
     }
     let tr = transmittance(sigma_t, walked);
-    Flight::Pass { weight: tr / (tr.element_sum() / 3.0).max(f64::MIN_POSITIVE) }
+    Flight::Pass {
+        weight: tr / (tr.element_sum() / 3.0).max(f64::MIN_POSITIVE),
+    }
 }

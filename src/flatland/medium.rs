@@ -42,7 +42,13 @@ pub use crate::core::free_flight::Flight;
 impl Medium {
     pub fn new(sigma_a: Rgb, sigma_s: Rgb, g: f64, region: Region) -> Self {
         let sigma_t = sigma_a + sigma_s;
-        Medium { sigma_a, sigma_s, sigma_t, phase: Hg2::new(g), region }
+        Medium {
+            sigma_a,
+            sigma_s,
+            sigma_t,
+            phase: Hg2::new(g),
+            region,
+        }
     }
 
     /// Is `p` inside the medium's region?

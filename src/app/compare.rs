@@ -1,0 +1,214 @@
+//! The compare view's computation: a reference field and two cache methods (ours,
+//! Jarosz 2008) on the same scene at equal cache count, as `volcache figure compare`
+//! composes them: `render_field` for the reference (seed ^ 0x5EED), then per method
+//! `render_with_count` to find ε and a fresh, timed `render_cached` at that ε (the
+//! search's memoised light fields would hide its cost), and `field_errors` against
+//! the reference. The field settings are the scene's own (as the command line's),
+//! at the compare resolution, so [`compare_command`] reproduces the numbers.
+
+use super::command::shell_quote;
+use super::jobs::{Job, Notify, Priority, Reporter};
+use crate::flatland::cached_field::{
+    CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached, render_with_count,
+};
+use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
+use crate::flatland::scene::Scene;
+use std::sync::Arc;
+
+/// The methods compared, in the order shown.
+pub const METHODS: [CacheMethod; 2] = [CacheMethod::Ours, CacheMethod::Jarosz08];
+
+/// Parameters of the comparison (the side panel's "Compare"), small by default.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompareParams {
+    /// Equal-count mode: records each method places (`--caches`).
+    pub caches: usize,
+    /// Directions per record (`--rays`).
+    pub rays: usize,
+    /// Ray-marched medium samples per direction (`--steps`).
+    pub steps: usize,
+    /// Resolution (`--res`); None: half the app's field resolution.
+    pub res: Option<[usize; 2]>,
+    /// Samples per pixel of the reference (`--ref-spp`).
+    pub ref_spp: u32,
+}
+
+impl Default for CompareParams {
+    fn default() -> Self {
+        CompareParams {
+            caches: 150,
+            rays: 512,
+            steps: 16,
+            res: None,
+            ref_spp: 256,
+        }
+    }
+}
+
+impl CompareParams {
+    /// The field parameters of the comparison: the scene's render settings (as
+    /// `figure compare`), at [`CompareParams::res`] or half of `app`'s resolution,
+    /// with `app`'s seed.
+    pub fn field_params(&self, scene: &Scene, app: &FieldParams) -> FieldParams {
+        let [w, h] = self.res.unwrap_or([(app.width / 2).max(1), (app.height / 2).max(1)]);
+        FieldParams {
+            width: w.max(1),
+            height: h.max(1),
+            seed: app.seed,
+            ..FieldParams::from_scene(scene)
+        }
+    }
+
+    /// The cache settings of `method` (as `volcache caches`' defaults with these
+    /// rays, steps and seed).
+    pub fn cache_settings(&self, method: CacheMethod, seed: u64) -> CacheSettings {
+        let mut cs = CacheSettings::new(method, 0.05);
+        cs.probe.rays = self.rays.max(3);
+        cs.probe.steps = self.steps.max(1);
+        cs.seed = seed;
+        cs
+    }
+
+    /// The reference's field parameters (the seed of `figure compare`).
+    pub fn reference_params(&self, fp: &FieldParams) -> FieldParams {
+        FieldParams {
+            spp: self.ref_spp.max(1),
+            seed: fp.seed ^ 0x5EED,
+            ..fp.clone()
+        }
+    }
+}
+
+/// What the comparison restarts for: the scene revision and the parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompareKey {
+    pub revision: u64,
+    pub fp: FieldParams,
+    pub params: CompareParams,
+}
+
+/// One method's result and cost.
+#[derive(Clone, Debug)]
+pub struct MethodRun {
+    pub method: CacheMethod,
+    /// ε found by the equal-count search.
+    pub eps: f64,
+    /// Every record (of every cache).
+    pub records: Vec<RecordInfo>,
+    pub field: Field,
+    /// Rays of the timed run (placement + per-pixel direct part).
+    pub rays: u64,
+    /// Seconds of the timed run (placement + reconstruction).
+    pub seconds: f64,
+    pub errors: FieldErrors,
+}
+
+impl MethodRun {
+    pub fn is_finite(&self) -> bool {
+        self.eps.is_finite()
+            && self.seconds.is_finite()
+            && self.errors.rmse.is_finite()
+            && self.errors.relmse.is_finite()
+    }
+}
+
+/// The comparison so far: the reference, then one run per method as it lands.
+#[derive(Clone, Debug)]
+pub struct CompareResult {
+    pub fp: FieldParams,
+    pub reference: Field,
+    pub ref_spp: u32,
+    pub ref_rays: u64,
+    pub ref_seconds: f64,
+    pub runs: Vec<MethodRun>,
+}
+
+impl CompareResult {
+    pub fn run(&self, method: CacheMethod) -> Option<&MethodRun> {
+        self.runs.iter().find(|r| r.method == method)
+    }
+
+    /// Every method has run.
+    pub fn is_complete(&self) -> bool {
+        self.runs.len() == METHODS.len()
+    }
+}
+
+pub fn method_label(m: CacheMethod) -> &'static str {
+    match m {
+        CacheMethod::Ours => "ours",
+        CacheMethod::Jarosz08 => "Jarosz 2008",
+    }
+}
+
+/// Reference, then each method; a result is sent after each step.
+pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job<Arc<CompareResult>> {
+    let (fp, params) = (key.fp.clone(), key.params.clone());
+    Job::spawn(
+        "compare",
+        Priority::Background,
+        notify,
+        move |r: &Reporter<Arc<CompareResult>>| {
+            let rp = params.reference_params(&fp);
+            r.stage(format!(
+                "compare: reference {}×{} @ {} spp",
+                rp.width, rp.height, rp.spp
+            ));
+            let reference = render_field(&scene, &rp, r.progress())?;
+            r.add_rays(reference.rays);
+            let mut res = CompareResult {
+                fp: fp.clone(),
+                reference: reference.field,
+                ref_spp: rp.spp,
+                ref_rays: reference.rays,
+                ref_seconds: reference.seconds,
+                runs: Vec::new(),
+            };
+            r.send(Arc::new(res.clone()));
+            let target = params.caches.max(1);
+            for method in METHODS {
+                let cs = params.cache_settings(method, fp.seed);
+                let name = method_label(method);
+                r.stage(format!("compare: {name}, searching ε for {target} records"));
+                let mut memo = RecordMemo::new();
+                let (_, eps) = render_with_count(&scene, &fp, &cs, target, &mut memo, r.progress())?;
+                r.add_rays(memo.values().map(|d| d.rays).sum());
+                r.stage(format!("compare: {name}, timed run at ε = {eps:.3e}"));
+                let start = std::time::Instant::now();
+                let cs = CacheSettings { eps, ..cs };
+                let f = render_cached(&scene, &fp, &cs, &mut RecordMemo::new(), r.progress())?;
+                let seconds = start.elapsed().as_secs_f64();
+                let rays = f.placement_rays + f.reconstruction_rays;
+                r.add_rays(rays);
+                res.runs.push(MethodRun {
+                    method,
+                    eps,
+                    records: f.records.concat(),
+                    errors: field_errors(&f.field, &res.reference),
+                    field: f.field,
+                    rays,
+                    seconds,
+                });
+                r.send(Arc::new(res.clone()));
+            }
+            Ok(())
+        },
+    )
+}
+
+/// `volcache figure compare` reproducing the comparison (`scene`: None for the
+/// embedded default scene).
+pub fn compare_command(scene: Option<&str>, fp: &FieldParams, p: &CompareParams, out: &str) -> String {
+    format!(
+        "volcache figure compare{} --caches {} --rays {} --steps {} --res {}x{} --ref-spp {} --seed {} --out {}",
+        scene.map_or(String::new(), |s| format!(" {}", shell_quote(s))),
+        p.caches.max(1),
+        p.rays.max(3),
+        p.steps.max(1),
+        fp.width,
+        fp.height,
+        p.ref_spp.max(1),
+        fp.seed,
+        shell_quote(out)
+    )
+}
