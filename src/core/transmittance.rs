@@ -35,6 +35,16 @@ pub fn transmittance_taylor<S: Space>(sigma_t: f64, x: S::Vec, c: S::Vec, soft: 
     r.compose((-tau).exp(), -(ln_sigma - tau).exp(), (2.0 * ln_sigma - tau).exp())
 }
 
+/// Per-channel [`transmittance_taylor`] for an RGB extinction (one evaluation for
+/// grey media).
+pub fn transmittance_taylor_rgb<S: Space>(sigma_t: Rgb, x: S::Vec, c: S::Vec, soft: f64) -> [Taylor2<S>; 3] {
+    if sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z {
+        [transmittance_taylor::<S>(sigma_t.x, x, c, soft); 3]
+    } else {
+        [0, 1, 2].map(|ch| transmittance_taylor::<S>(sigma_t[ch], x, c, soft))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -163,16 +163,7 @@ impl Default for AwareSettings {
     }
 }
 use crate::core::phase::{Hg2, phase_taylor};
-use crate::core::transmittance::transmittance_taylor;
-
-/// Per-channel transmittance Taylors towards `c` (one evaluation for grey media).
-fn transmittance3(sigma_t: Rgb, x: DVec2, c: DVec2, soft: f64) -> [Taylor2<D2>; 3] {
-    if sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z {
-        [transmittance_taylor::<D2>(sigma_t.x, x, c, soft); 3]
-    } else {
-        [0, 1, 2].map(|ch| transmittance_taylor::<D2>(sigma_t[ch], x, c, soft))
-    }
-}
+use crate::core::transmittance::{transmittance_taylor, transmittance_taylor_rgb};
 
 /// The direct part (delta lights) with closed-form derivatives, visibility fixed.
 /// Transmittance through partial medium regions uses the effective extinction
@@ -270,7 +261,7 @@ pub fn element_incident(lf: &LightField, e: &Element, medium_clamp: f64) -> Tayl
             medium_form_factor_smoothed::<D2>(e.anchor, width * lf.step, x, medium_clamp * lf.step) * (1.0 / lf.step)
         }
     };
-    TaylorRgb::tint(form, e.radiance).mul_channels(transmittance3(lf.sigma_t, x, e.anchor, soft))
+    TaylorRgb::tint(form, e.radiance).mul_channels(transmittance_taylor_rgb::<D2>(lf.sigma_t, x, e.anchor, soft))
 }
 
 /// Circular-harmonic moments of the incident light, per cached part, each with its

@@ -22,7 +22,7 @@ use crate::core::rng::Sampler;
 use crate::core::space::D3;
 use crate::core::taylor::Taylor2;
 use crate::core::taylor_rgb::TaylorRgb;
-use crate::core::transmittance::transmittance_taylor;
+use crate::core::transmittance::{transmittance_taylor, transmittance_taylor_rgb};
 use crate::core::triangle::triangle_form_factor;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -61,15 +61,6 @@ impl Default for AwareSettings {
             rule: RadianceRule::Farther,
             medium_clamp: 1.0,
         }
-    }
-}
-
-/// Per-channel transmittance Taylors towards `c` (one evaluation for grey media).
-fn transmittance3(sigma_t: Rgb, x: DVec3, c: DVec3, soft: f64) -> [Taylor2<D3>; 3] {
-    if sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z {
-        [transmittance_taylor::<D3>(sigma_t.x, x, c, soft); 3]
-    } else {
-        [0, 1, 2].map(|ch| transmittance_taylor::<D3>(sigma_t[ch], x, c, soft))
     }
 }
 
@@ -148,7 +139,7 @@ pub fn element_incident(lf: &LightField, e: &Element, medium_clamp: f64) -> Tayl
             medium_form_factor_smoothed::<D3>(e.anchor, volume, x, medium_clamp * lf.step) * (1.0 / lf.step)
         }
     };
-    TaylorRgb::tint(form, e.radiance).mul_channels(transmittance3(lf.sigma_t, x, e.anchor, soft))
+    TaylorRgb::tint(form, e.radiance).mul_channels(transmittance_taylor_rgb::<D3>(lf.sigma_t, x, e.anchor, soft))
 }
 
 /// One proxy element's contribution σ_s f T L F with its derivatives.
