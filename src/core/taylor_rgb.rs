@@ -81,3 +81,31 @@ impl<S: Space> AddAssign for TaylorRgb<S> {
         *self = *self + o;
     }
 }
+
+/// L_s with its derivatives, per part (theory.md §2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PartDerivs<S: Space> {
+    pub direct: TaylorRgb<S>,
+    pub single: TaylorRgb<S>,
+    pub multiple: TaylorRgb<S>,
+}
+
+impl<S: Space> Default for PartDerivs<S> {
+    fn default() -> Self {
+        PartDerivs {
+            direct: TaylorRgb::default(),
+            single: TaylorRgb::default(),
+            multiple: TaylorRgb::default(),
+        }
+    }
+}
+
+impl<S: Space> PartDerivs<S> {
+    pub fn total(&self) -> TaylorRgb<S> {
+        self.direct + self.single + self.multiple
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.direct.is_finite() && self.single.is_finite() && self.multiple.is_finite()
+    }
+}

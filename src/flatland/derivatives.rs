@@ -12,27 +12,13 @@ use crate::core::color::Rgb;
 use crate::core::space::D2;
 use crate::core::taylor::Taylor2;
 use crate::core::taylor_rgb::TaylorRgb;
+use crate::core::unaware::{UnawareRay, hit_distance_gradient};
 use glam::{DMat2, DVec2};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// L_s with its derivatives, per part (theory.md §2).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PartDerivs {
-    pub direct: TaylorRgb<D2>,
-    pub single: TaylorRgb<D2>,
-    pub multiple: TaylorRgb<D2>,
-}
-
-impl PartDerivs {
-    pub fn total(&self) -> TaylorRgb<D2> {
-        self.direct + self.single + self.multiple
-    }
-
-    pub fn is_finite(&self) -> bool {
-        self.direct.is_finite() && self.single.is_finite() && self.multiple.is_finite()
-    }
-}
+pub type PartDerivs = crate::core::taylor_rgb::PartDerivs<D2>;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
@@ -343,39 +329,24 @@ pub fn aware(lf: &LightField, elements: &[Element], settings: &AwareSettings) ->
 pub fn unaware(lf: &LightField) -> PartDerivs {
     let hg = Hg2::new(lf.g);
     let dtheta = lf.ray_measure();
-    let mut single = [Taylor2::<D2>::zero(); 3];
-    let mut multiple = [Taylor2::<D2>::zero(); 3];
+    let (mut single, mut multiple) = ([Taylor2::<D2>::zero(); 3], [Taylor2::<D2>::zero(); 3]);
+    let mut samples = Vec::new();
     for r in &lf.rays {
-        let f = hg.eval(-lf.omega_o, r.dir);
-        let w = lf.sigma_s * (f * dtheta);
-        // ∇s for a ray ending on a surface; rays cut in the medium have fixed length.
-        let grad_s = r.hit.map_or(DVec2::ZERO, |h| {
-            let nd = h.normal.dot(r.dir);
-            -h.normal / nd.abs().max(1e-3).copysign(nd)
-        });
-        let s = r.length;
-        if let Some(h) = &r.hit {
-            for c in 0..3 {
-                let t = (-lf.sigma_t[c] * s).exp();
-                let v = w[c] * t * h.radiance[c];
-                single[c] += Taylor2::new(v, grad_s * (-lf.sigma_t[c] * v), DMat2::ZERO);
-            }
+        samples.clear();
+        samples.extend(r.samples.iter().enumerate().map(|(i, l)| (lf.sample_depth(r, i), *l)));
+        UnawareRay::<D2> {
+            sigma_t: lf.sigma_t,
+            weight: lf.sigma_s * (hg.eval(-lf.omega_o, r.dir) * dtheta),
+            // Rays cut in the medium have a length that does not depend on x.
+            grad_s: r
+                .hit
+                .map_or(DVec2::ZERO, |h| hit_distance_gradient::<D2>(h.normal, r.dir)),
+            length: r.length,
+            end_radiance: r.hit.map_or(Rgb::ZERO, |h| h.radiance),
+            samples: &samples,
+            step: lf.step,
         }
-        for (i, l) in r.samples.iter().enumerate() {
-            let t_i = lf.sample_depth(r, i);
-            for c in 0..3 {
-                let sig = lf.sigma_t[c];
-                let tr = (-sig * t_i).exp();
-                let v = w[c] * tr * l[c] * lf.step;
-                // d/ds [T(u s) L Δu s] = T L Δu (1 − σ u s), with u s = t_i.
-                let ds = if r.hit.is_some() {
-                    w[c] * tr * l[c] * (lf.step / s) * (1.0 - sig * t_i)
-                } else {
-                    0.0
-                };
-                multiple[c] += Taylor2::new(v, grad_s * ds, DMat2::ZERO);
-            }
-        }
+        .accumulate(&mut single, &mut multiple);
     }
     let mut direct = direct_derivatives(lf);
     for ch in &mut direct.channels {

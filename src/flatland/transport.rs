@@ -156,14 +156,8 @@ pub fn radiance_path(
         beta *= weight;
         dir = w;
         pdf_prev = Some(pdf);
-        if depth >= settings.rr_depth {
-            let q = beta.max_element();
-            if q < 1.0 {
-                if s.next_f64() >= q {
-                    break;
-                }
-                beta /= q;
-            }
+        if depth >= settings.rr_depth && !crate::core::roulette::survives(&mut beta, s) {
+            break;
         }
         if beta == Rgb::ZERO || !beta.is_finite() {
             break;

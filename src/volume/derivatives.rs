@@ -11,7 +11,7 @@
 
 use super::lights::Lobe;
 use super::probe::{DirectLight, LightField};
-use super::proxy::{Element, ElementKind, RadianceRule};
+use super::proxy::{Element, ElementKind};
 use super::scene::Scene;
 use super::transport::{Settings, sample_lobe};
 use crate::core::color::Rgb;
@@ -24,45 +24,15 @@ use crate::core::taylor::Taylor2;
 use crate::core::taylor_rgb::TaylorRgb;
 use crate::core::transmittance::{transmittance_taylor, transmittance_taylor_rgb};
 use crate::core::triangle::triangle_form_factor;
+use crate::core::unaware::{UnawareRay, hit_distance_gradient};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
-use serde::Serialize;
 
 /// L_s with its derivatives, per part.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PartDerivs {
-    pub direct: TaylorRgb<D3>,
-    pub single: TaylorRgb<D3>,
-    pub multiple: TaylorRgb<D3>,
-}
+pub type PartDerivs = crate::core::taylor_rgb::PartDerivs<D3>;
 
-impl PartDerivs {
-    pub fn total(&self) -> TaylorRgb<D3> {
-        self.direct + self.single + self.multiple
-    }
-
-    pub fn is_finite(&self) -> bool {
-        self.direct.is_finite() && self.single.is_finite() && self.multiple.is_finite()
-    }
-}
-
-/// Settings of the occlusion-aware method.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct AwareSettings {
-    pub rule: RadianceRule,
-    /// Near-field smoothing of medium elements' form-factor derivatives, in units
-    /// of the march step Δt.
-    pub medium_clamp: f64,
-}
-
-impl Default for AwareSettings {
-    fn default() -> Self {
-        AwareSettings {
-            rule: RadianceRule::Farther,
-            medium_clamp: 1.0,
-        }
-    }
-}
+/// The occlusion-aware method's settings are the 2D ones.
+pub use crate::flatland::derivatives::AwareSettings;
 
 /// The direct part (delta lights) with closed-form derivatives, visibility fixed.
 /// Transmittance to a point light uses the effective extinction −ln T / r of the
@@ -190,42 +160,23 @@ pub fn aware(lf: &LightField, elements: &[Element], settings: &AwareSettings) ->
 pub fn unaware(lf: &LightField) -> PartDerivs {
     let hg = Hg3::new(lf.g);
     let domega = lf.ray_measure();
-    let mut single = [Taylor2::<D3>::zero(); 3];
-    let mut multiple = [Taylor2::<D3>::zero(); 3];
+    let (mut single, mut multiple) = ([Taylor2::<D3>::zero(); 3], [Taylor2::<D3>::zero(); 3]);
+    let mut samples = Vec::new();
     for r in &lf.rays {
-        let f = hg.eval(-lf.omega_o, r.dir);
-        let w = lf.sigma_s * (f * domega);
-        let grad_s = r.hit.map_or(DVec3::ZERO, |h| {
-            let nd = h.normal.dot(r.dir);
-            -h.normal / nd.abs().max(1e-3).copysign(nd)
-        });
-        let s = r.length;
-        let end_radiance = r.hit.map_or(r.escaped, |h| h.radiance);
-        if end_radiance != Rgb::ZERO {
-            for c in 0..3 {
-                let t = (-lf.sigma_t[c] * s).exp();
-                let v = w[c] * t * end_radiance[c];
-                single[c] += Taylor2::new(v, grad_s * (-lf.sigma_t[c] * v), DMat3::ZERO);
-            }
+        samples.clear();
+        samples.extend(r.samples.iter().enumerate().map(|(i, l)| (lf.sample_depth(r, i), *l)));
+        UnawareRay::<D3> {
+            sigma_t: lf.sigma_t,
+            weight: lf.sigma_s * (hg.eval(-lf.omega_o, r.dir) * domega),
+            grad_s: r
+                .hit
+                .map_or(DVec3::ZERO, |h| hit_distance_gradient::<D3>(h.normal, r.dir)),
+            length: r.length,
+            end_radiance: r.hit.map_or(r.escaped, |h| h.radiance),
+            samples: &samples,
+            step: lf.step,
         }
-        for (i, l) in r.samples.iter().enumerate() {
-            if *l == Rgb::ZERO {
-                continue;
-            }
-            let t_i = lf.sample_depth(r, i);
-            for c in 0..3 {
-                let sig = lf.sigma_t[c];
-                let tr = (-sig * t_i).exp();
-                let v = w[c] * tr * l[c] * lf.step;
-                // d/ds [T(u s) L Δu s] = T L Δu (1 − σ u s), with u s = t_i.
-                let ds = if r.hit.is_some() {
-                    w[c] * tr * l[c] * (lf.step / s) * (1.0 - sig * t_i)
-                } else {
-                    0.0
-                };
-                multiple[c] += Taylor2::new(v, grad_s * ds, DMat3::ZERO);
-            }
-        }
+        .accumulate(&mut single, &mut multiple);
     }
     let mut direct = direct_derivatives(lf);
     for ch in &mut direct.channels {
