@@ -19,4 +19,5 @@ pub mod figure;
 pub mod flatland;
 pub mod output;
 pub mod progress;
+pub mod scene_check;
 pub mod volume;

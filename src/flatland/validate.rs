@@ -2,74 +2,22 @@
 
 use super::scene_desc::*;
 
-/// One problem with a scene: the JSON path of the field and what is wrong.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Problem {
-    pub path: String,
-    pub message: String,
-}
+use crate::scene_check::Checker;
+pub use crate::scene_check::Problem;
 
-struct Checker {
-    problems: Vec<Problem>,
-}
-
-impl Checker {
-    fn fail(&mut self, path: impl Into<String>, message: impl Into<String>) {
-        self.problems.push(Problem {
-            path: path.into(),
-            message: message.into(),
-        });
-    }
-
-    fn finite(&mut self, path: &str, v: f64) -> bool {
-        if v.is_finite() {
-            true
-        } else {
-            self.fail(path, format!("must be a finite number, got {v}"));
-            false
-        }
-    }
-
-    fn point(&mut self, path: &str, p: [f64; 2]) -> bool {
-        self.finite(&format!("{path}[0]"), p[0]) & self.finite(&format!("{path}[1]"), p[1])
-    }
-
-    fn color(&mut self, path: &str, c: &Color, max: Option<f64>) {
-        for (i, &v) in c.0.iter().enumerate() {
-            let p = format!("{path}[{i}]");
-            if !self.finite(&p, v) {
-                continue;
-            }
-            if v < 0.0 {
-                self.fail(p, format!("must not be negative, got {v}"));
-            } else if let Some(m) = max.filter(|&m| v > m) {
-                self.fail(p, format!("must be at most {m}, got {v}"));
-            }
-        }
-    }
-
-    fn inside(&mut self, path: &str, p: [f64; 2], dom: &RectDesc, what: &str) {
-        let tol = 1e-9 * ((dom.max[0] - dom.min[0]) + (dom.max[1] - dom.min[1]));
-        let ok = (0..2).all(|k| p[k] >= dom.min[k] - tol && p[k] <= dom.max[k] + tol);
-        if !ok {
-            self.fail(path, format!("{what} at ({}, {}) is outside the domain", p[0], p[1]));
-        }
-    }
-
-    fn rect(&mut self, path: &str, r: &RectDesc) -> bool {
-        let ok = self.point(&format!("{path}.min"), r.min) & self.point(&format!("{path}.max"), r.max);
-        if ok && !(r.min[0] < r.max[0] && r.min[1] < r.max[1]) {
-            self.fail(format!("{path}.max"), "must be greater than min in both coordinates");
-            return false;
-        }
-        ok
+/// Report `p` when it lies outside the domain (with a tiny tolerance).
+fn inside(c: &mut Checker, path: &str, p: [f64; 2], dom: &RectDesc, what: &str) {
+    let tol = 1e-9 * ((dom.max[0] - dom.min[0]) + (dom.max[1] - dom.min[1]));
+    let ok = (0..2).all(|k| p[k] >= dom.min[k] - tol && p[k] <= dom.max[k] + tol);
+    if !ok {
+        c.fail(path, format!("{what} at ({}, {}) is outside the domain", p[0], p[1]));
     }
 }
 
 /// All the problems of a scene (empty when it is valid).
 pub fn validate(d: &SceneDesc) -> Vec<Problem> {
-    let mut c = Checker { problems: Vec::new() };
-    let domain_ok = c.rect("domain", &d.domain);
+    let mut c = Checker::default();
+    let domain_ok = c.bounds("domain", d.domain.min, d.domain.max);
     for (i, s) in d.segments.iter().enumerate() {
         let path = format!("segments[{i}]");
         validate_segment(&mut c, &path, s);
@@ -79,7 +27,13 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
         match l {
             LightDesc::Point { position, intensity } => {
                 if c.point(&format!("{path}.position"), *position) && domain_ok {
-                    c.inside(&format!("{path}.position"), *position, &d.domain, "the point light");
+                    inside(
+                        &mut c,
+                        &format!("{path}.position"),
+                        *position,
+                        &d.domain,
+                        "the point light",
+                    );
                 }
                 c.color(&format!("{path}.intensity"), intensity, None);
             }
@@ -98,7 +52,13 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
                 }
                 if ok && domain_ok {
                     for (k, end) in aperture.iter().enumerate() {
-                        c.inside(&format!("{path}.aperture[{k}]"), *end, &d.domain, "the aperture end");
+                        inside(
+                            &mut c,
+                            &format!("{path}.aperture[{k}]"),
+                            *end,
+                            &d.domain,
+                            "the aperture end",
+                        );
                     }
                 }
                 c.color(&format!("{path}.irradiance"), irradiance, None);
@@ -108,13 +68,11 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
     if let Some(m) = &d.medium {
         c.color("medium.sigma_a", &m.sigma_a, None);
         c.color("medium.sigma_s", &m.sigma_s, None);
-        if c.finite("medium.g", m.g) && !(m.g > -1.0 && m.g < 1.0) {
-            c.fail("medium.g", format!("must lie strictly between -1 and 1, got {}", m.g));
-        }
+        c.hg_g("medium.g", m.g);
         match &m.region {
             RegionDesc::Everywhere | RegionDesc::Domain => {}
             RegionDesc::Rect(r) => {
-                c.rect("medium.region.rect", r);
+                c.bounds("medium.region.rect", r.min, r.max);
             }
             RegionDesc::Polygon(pts) => {
                 let all = pts
@@ -133,19 +91,7 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
         }
     }
     let r = &d.render;
-    if r.resolution[0] == 0 || r.resolution[1] == 0 || r.resolution[0] > 16384 || r.resolution[1] > 16384 {
-        c.fail(
-            "render.resolution",
-            format!("must be between 1 and 16384 pixels per side, got {:?}", r.resolution),
-        );
-    }
-    if r.spp == 0 {
-        c.fail("render.spp", "must be at least 1");
-    }
-    if r.max_depth == 0 {
-        c.fail("render.max_depth", "must be at least 1");
-    }
-    c.finite("render.exposure", r.exposure);
+    c.render_block(r.resolution, r.spp, r.max_depth, r.exposure);
     c.finite("render.omega_o_deg", r.omega_o_deg);
     c.problems
 }
