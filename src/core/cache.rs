@@ -42,6 +42,8 @@ pub trait Blend: Sized {
     fn zero() -> Self;
     /// self += w · v.
     fn add_scaled(&mut self, v: &Self, w: f64);
+    /// self /= d.
+    fn divide(&mut self, d: f64);
 }
 
 impl Blend for f64 {
@@ -50,6 +52,9 @@ impl Blend for f64 {
     }
     fn add_scaled(&mut self, v: &Self, w: f64) {
         *self += w * v;
+    }
+    fn divide(&mut self, d: f64) {
+        *self /= d;
     }
 }
 
@@ -60,6 +65,9 @@ impl Blend for Rgb {
     fn add_scaled(&mut self, v: &Self, w: f64) {
         *self += *v * w;
     }
+    fn divide(&mut self, d: f64) {
+        *self /= d;
+    }
 }
 
 impl<T: Blend, const N: usize> Blend for [T; N] {
@@ -68,6 +76,9 @@ impl<T: Blend, const N: usize> Blend for [T; N] {
     }
     fn add_scaled(&mut self, v: &Self, w: f64) {
         self.iter_mut().zip(v).for_each(|(a, b)| a.add_scaled(b, w));
+    }
+    fn divide(&mut self, d: f64) {
+        self.iter_mut().for_each(|a| a.divide(d));
     }
 }
 
@@ -209,6 +220,13 @@ impl<S: Space, V> Cache<S, V> {
         out.sort_unstable_by_key(|&(i, _)| i);
     }
 
+    /// [`Cache::covering_into`] keeping only the records whose position passes
+    /// `keep` (e.g. a record must see y: it never extrapolates across a surface).
+    pub fn covering_where(&self, y: S::Vec, out: &mut Vec<(usize, f64)>, mut keep: impl FnMut(S::Vec) -> bool) {
+        self.covering_into(y, out);
+        out.retain(|&(i, _)| keep(self.shapes[i].0));
+    }
+
     /// Some record covers y.
     pub fn is_covered(&self, y: S::Vec) -> bool {
         let mut covered = false;
@@ -262,17 +280,30 @@ impl<S: Space, V: Interpolant<S>> Cache<S, V> {
 
     /// [`Cache::interpolate`] with a reused scratch buffer (no allocation per query).
     pub fn interpolate_with(&self, y: S::Vec, second_order: bool, scratch: &mut Vec<(usize, f64)>) -> Option<V::Out> {
-        self.covering_into(y, scratch);
-        if scratch.is_empty() {
-            return None;
-        }
-        let total: f64 = scratch.iter().map(|&(_, w)| w).sum();
+        self.interpolate_where(y, second_order, scratch, |_| true)
+    }
+
+    /// [`Cache::interpolate`] from the covering records whose position passes `keep`
+    /// ([`Cache::covering_where`]): Σ w_i v_i / Σ w_i, or None if none is kept.
+    pub fn interpolate_where(
+        &self,
+        y: S::Vec,
+        second_order: bool,
+        scratch: &mut Vec<(usize, f64)>,
+        keep: impl FnMut(S::Vec) -> bool,
+    ) -> Option<V::Out> {
+        self.covering_where(y, scratch, keep);
         let mut out = V::Out::zero();
+        let mut total = 0.0;
         for &(i, w) in scratch.iter() {
             let r = &self.records[i];
-            out.add_scaled(&r.value.extrapolated(y - r.position, second_order), w / total);
+            out.add_scaled(&r.value.extrapolated(y - r.position, second_order), w);
+            total += w;
         }
-        Some(out)
+        (total > 0.0).then(|| {
+            out.divide(total);
+            out
+        })
     }
 }
 

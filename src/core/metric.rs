@@ -12,7 +12,44 @@
 //! differentiating, unit radiance if every ray was black) is the caller's job: it
 //! changes how H is estimated, not how an extent follows from it.
 
+use super::color::Rgb;
 use super::space::Space;
+use super::taylor::Taylor2;
+use serde::{Deserialize, Serialize};
+
+/// Which metric turns a record's derivatives into its extent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum CacheMethod {
+    /// Second-order occlusion-aware Hessian ellipses (the paper).
+    Ours,
+    /// First-order occlusion-unaware gradient circles (Jarosz et al. 2008).
+    Jarosz08,
+}
+
+impl CacheMethod {
+    /// The extent of a record with luminance `lum` (value and gradient) and the
+    /// luminance Hessian its metric uses (`metric_hess`, ignored by the baseline).
+    pub fn extent<S: Space>(self, lum: &Taylor2<S>, metric_hess: S::Mat, p: &MetricParams) -> Extent<S> {
+        match self {
+            CacheMethod::Ours => second_order_extent::<S>(lum.value, metric_hess, lum.grad, p),
+            CacheMethod::Jarosz08 => first_order_extent::<S>(lum.value, lum.grad, p),
+        }
+    }
+}
+
+/// The radiance added to every proxy element before the metric's Hessian is taken
+/// (theory.md §7, Schwarzhaupt et al. 2012): `fraction` × the elements' mean
+/// radiance, or unit radiance when every element is black (a purely geometric
+/// Hessian). None when nothing is to be added.
+pub fn hessian_radiance_floor(radiances: impl ExactSizeIterator<Item = Rgb>, fraction: f64) -> Option<Rgb> {
+    let n = radiances.len();
+    if n == 0 || fraction <= 0.0 {
+        return None;
+    }
+    let mean = radiances.sum::<Rgb>() / n as f64;
+    Some(if mean == Rgb::ZERO { Rgb::ONE } else { mean * fraction })
+}
 
 /// Parameters of the extent computation (lengths in scene units, L in luminance).
 #[derive(Clone, Copy, Debug, PartialEq)]

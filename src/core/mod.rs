@@ -5,6 +5,7 @@ mod cache_index;
 pub mod color;
 pub mod distance;
 pub mod element;
+pub mod equal_count;
 pub mod free_flight;
 pub mod harmonics;
 pub mod metric;

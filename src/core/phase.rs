@@ -15,7 +15,7 @@
 //! μ = −ω_j · ω_o; [`phase_taylor`] returns it with its gradient and Hessian in x,
 //! using the 2D HG for `D2` and the 3D HG for `D3` ([`hg_of_mu`]).
 
-use super::distance::{Offset, direction_along_from};
+use super::distance::{Offset, direction_along, direction_along_from};
 use super::space::Space;
 use super::taylor::Taylor2;
 use glam::{DVec2, DVec3};
@@ -60,6 +60,18 @@ pub fn hg_of_mu<S: Space>(g: f64, mu: f64) -> (f64, f64, f64) {
     hg_of_den::<S>(g, den)
 }
 
+/// Where in-scattered light leaves towards: L_s(x, ω_o) with ω_o fixed, or ω_o
+/// pointing from x to a fixed point (a pinhole camera), so that what the camera sees
+/// of each medium point is a function of x alone, with derivatives that include the
+/// turning of ω_o as x moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Outgoing<V> {
+    /// A fixed direction ω_o (need not be normalised; zero means the first axis).
+    Direction(V),
+    /// ω_o(x) = (e − x)/|e − x| towards the point e.
+    TowardsPoint(V),
+}
+
 /// The phase factor f(−ω_j · ω_o) of light from an element centred at `c` received
 /// at `x` and scattered towards the unit vector `w_o`, with gradient and Hessian in x.
 ///
@@ -68,24 +80,74 @@ pub fn hg_of_mu<S: Space>(g: f64, mu: f64) -> (f64, f64, f64) {
 /// 1/soft²) when x nears c; pass a small fraction of the element's size.
 /// Isotropic media (g = 0) return the constant 1/|S^{d−1}| without any work.
 pub fn phase_taylor<S: Space>(g: f64, x: S::Vec, c: S::Vec, w_o: S::Vec, soft: f64) -> Taylor2<S> {
+    phase_taylor_out(g, x, c, Outgoing::Direction(w_o), soft)
+}
+
+/// [`phase_taylor`] for either kind of [`Outgoing`]. Towards a point e, μ = −u_c·u_e
+/// is a product of two direction fields (product rule), and 1 ∓ μ comes from
+/// |u_c ± u_e|² as for a fixed direction, so g → ±1 stays free of cancellation.
+pub fn phase_taylor_out<S: Space>(g: f64, x: S::Vec, c: S::Vec, out: Outgoing<S::Vec>, soft: f64) -> Taylor2<S> {
     if g == 0.0 {
         return Taylor2::constant(1.0 / S::SPHERE_MEASURE);
     }
     let g = g.clamp(-G_MAX, G_MAX);
-    let len = S::length(w_o);
-    let w = if len > 0.0 { w_o / len } else { S::axis(0) };
     let o = Offset::<S>::new(x, c, soft);
-    // μ = −u·w. 1 ∓ μ from |u ± w|² and 1 − |u|² = ε²/r², so D never cancels.
-    let mu = -direction_along_from(&o, w);
+    // μ = −u·w, and w's own softening ratio (zero for a fixed unit direction).
+    let (mu, w, w_soft2) = match out {
+        Outgoing::Direction(w_o) => {
+            let len = S::length(w_o);
+            let w = if len > 0.0 { w_o / len } else { S::axis(0) };
+            (-direction_along_from(&o, w), w, 0.0)
+        }
+        Outgoing::TowardsPoint(e) => {
+            let oe = Offset::<S>::new(x, e, 0.0);
+            let mut dot = Taylor2::<S>::zero();
+            for k in 0..S::DIM {
+                let a = S::axis(k);
+                dot += direction_along_from(&o, a) * direction_along_from(&oe, a);
+            }
+            (-dot, oe.u, oe.soft_ratio2)
+        }
+    };
+    // 1 ∓ μ from |u ± w|² and 1 − |u|² = ε²/r², so D never cancels.
+    let soft2 = o.soft_ratio2 + w_soft2;
     let den = if g >= 0.0 {
-        let one_minus_mu = 0.5 * (S::length_squared(o.u + w) + o.soft_ratio2);
+        let one_minus_mu = 0.5 * (S::length_squared(o.u + w) + soft2);
         (1.0 - g) * (1.0 - g) + 2.0 * g * one_minus_mu
     } else {
-        let one_plus_mu = 0.5 * (S::length_squared(o.u - w) + o.soft_ratio2);
+        let one_plus_mu = 0.5 * (S::length_squared(o.u - w) + soft2);
         (1.0 + g) * (1.0 + g) - 2.0 * g * one_plus_mu
     };
     let (f, df, d2f) = hg_of_den::<S>(g, den);
     mu.compose(f, df, d2f)
+}
+
+/// The phase factor f(−ω · ω_o) of light arriving along a *fixed* direction ω
+/// (from ω, travelling along −ω), as a field of x: constant for a fixed ω_o, and
+/// turning with ω_o(x) towards a point (the occlusion-unaware derivatives of Jarosz
+/// et al. 2008 keep each ray's direction fixed).
+pub fn phase_taylor_fixed_direction<S: Space>(g: f64, x: S::Vec, w: S::Vec, out: Outgoing<S::Vec>) -> Taylor2<S> {
+    if g == 0.0 {
+        return Taylor2::constant(1.0 / S::SPHERE_MEASURE);
+    }
+    let g = g.clamp(-G_MAX, G_MAX);
+    let unit = |v: S::Vec| {
+        let len = S::length(v);
+        if len > 0.0 { v / len } else { S::axis(0) }
+    };
+    let w = unit(w);
+    match out {
+        Outgoing::Direction(w_o) => {
+            let den = hg_denominator(g, -w, unit(w_o), S::length_squared);
+            Taylor2::constant(hg_of_den::<S>(g, den).0)
+        }
+        Outgoing::TowardsPoint(e) => {
+            let mu = direction_along::<S>(x, e, 0.0, -w);
+            let den = hg_denominator(g, -w, Offset::<S>::new(x, e, 0.0).u, S::length_squared);
+            let (f, df, d2f) = hg_of_den::<S>(g, den);
+            mu.compose(f, df, d2f)
+        }
+    }
 }
 
 /// 1 + g² − 2gμ for unit vectors a, b (μ = a·b), computed without cancellation.
@@ -222,6 +284,65 @@ mod tests {
             worst = worst.max(e);
         }
         worst
+    }
+
+    /// ω_o towards a point (the camera): both directions turn with x.
+    fn phase_to_point_ad_errors<S: Space>(seed: u64) -> f64 {
+        let mut s = Sampler::new(seed, 0);
+        let mut worst = 0.0f64;
+        for i in 0..600 {
+            let g = [-0.99, -0.5, 0.3, 0.9, 0.99][i % 5];
+            let soft = [0.0, 1e-3, 0.2][(i / 5) % 3];
+            let x = random_vec::<S>(&mut s, 1.0);
+            let c = random_vec::<S>(&mut s, 3.0);
+            let mut e = x + random_unit::<S>(&mut s) * (0.5 + 3.0 * s.next_f64());
+            if i % 7 == 0 {
+                // The camera right behind the element: μ ≈ 1, the forward peak.
+                e = x - (c - x) * (0.5 + s.next_f64()) + random_vec::<S>(&mut s, 1e-3);
+            }
+            let got = phase_taylor_out::<S>(g, x, c, Outgoing::TowardsPoint(e), soft);
+            let want = ad_taylor::<S>(|xs| phase_ref_point::<S>(g, xs, c, e, soft), x);
+            let err = rel_err(&got, &want);
+            assert!(err < 1e-9, "g={g} soft={soft}: rel err {err:e}\n{got:?}\n{want:?}");
+            worst = worst.max(err);
+        }
+        worst
+    }
+
+    #[test]
+    fn phase_of_a_fixed_direction_towards_a_point_matches_ad() {
+        let mut s = Sampler::new(25, 0);
+        for i in 0..200 {
+            let g = [-0.9, -0.3, 0.0, 0.5, 0.95][i % 5];
+            let x = random_vec::<D3>(&mut s, 1.0);
+            let w = random_unit::<D3>(&mut s);
+            let e = x + random_unit::<D3>(&mut s) * (0.5 + 3.0 * s.next_f64());
+            let got = phase_taylor_fixed_direction::<D3>(g, x, w, Outgoing::TowardsPoint(e));
+            // A source point far along w: its direction from x is w whatever x does.
+            let want = ad_taylor::<D3>(|xs| phase_ref_point::<D3>(g, xs, x + w * 1e12, e, 0.0), x);
+            let err = rel_err(&got, &want);
+            assert!(err < 1e-6, "g={g}: rel err {err:e}\n{got:?}\n{want:?}");
+            let fixed = phase_taylor_fixed_direction::<D3>(g, x, w, Outgoing::Direction(e - x));
+            assert!((fixed.value - got.value).abs() <= 1e-12 * got.value.abs().max(1e-300));
+            assert_eq!(fixed.grad, glam::DVec3::ZERO);
+        }
+    }
+
+    #[test]
+    fn phase_towards_a_point_matches_ad() {
+        let e2 = phase_to_point_ad_errors::<D2>(23);
+        let e3 = phase_to_point_ad_errors::<D3>(24);
+        eprintln!("phase_taylor_out(TowardsPoint) max rel AD error: 2D {e2:e}, 3D {e3:e}");
+        assert!(e2 < 1e-10 && e3 < 1e-10, "2D {e2:e}, 3D {e3:e}");
+        // With the point far away along w, it is the fixed-direction phase.
+        let (x, c, w) = (
+            glam::DVec3::new(0.1, 0.2, 0.3),
+            glam::DVec3::new(1.0, -0.5, 2.0),
+            glam::DVec3::Y,
+        );
+        let far = phase_taylor_out::<D3>(0.7, x, c, Outgoing::TowardsPoint(x + w * 1e9), 0.0);
+        let fixed = phase_taylor::<D3>(0.7, x, c, w, 0.0);
+        assert!(rel_err(&far, &fixed) < 1e-6);
     }
 
     #[test]

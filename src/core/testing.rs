@@ -60,6 +60,25 @@ pub fn phase_ref<S: Space>(g: f64, xs: &[HD], c: S::Vec, w: S::Vec, soft: f64) -
     den.powf(-n) * ((1.0 - g * g) / S::SPHERE_MEASURE)
 }
 
+/// The phase factor with ω_o towards the point e: μ = −u_c·u_e, u_c softened
+/// towards c and u_e = (e − x)/|e − x|, for AD.
+pub fn phase_ref_point<S: Space>(g: f64, xs: &[HD], c: S::Vec, e: S::Vec, soft: f64) -> HD {
+    let mut rc2 = HD::from(soft.max(MIN_DISTANCE).powi(2));
+    let mut re2 = HD::from(MIN_DISTANCE.powi(2));
+    let mut dot = HD::from(0.0);
+    for k in 0..S::DIM {
+        let dc = -xs[k] + c[k];
+        let de = -xs[k] + e[k];
+        rc2 += dc * dc;
+        re2 += de * de;
+        dot += dc * de;
+    }
+    let mu = -dot / (rc2.sqrt() * re2.sqrt());
+    let den = -mu * (2.0 * g) + (1.0 + g * g);
+    let n = if S::DIM == 2 { 1.0 } else { 1.5 };
+    den.powf(-n) * ((1.0 - g * g) / S::SPHERE_MEASURE)
+}
+
 /// exp(−σ √(|c − x|² + soft²)), for AD.
 pub fn transmittance_ref<S: Space>(sigma: f64, xs: &[HD], c: S::Vec, soft: f64) -> HD {
     let mut r2 = HD::from(soft.max(MIN_DISTANCE).powi(2));

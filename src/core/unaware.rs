@@ -23,6 +23,8 @@ pub struct UnawareRay<'a, S: Space> {
     pub sigma_t: Rgb,
     /// σ_s f(ω) dω of the ray.
     pub weight: Rgb,
+    /// ∇ ln f: non-zero only when ω_o turns with x (towards a camera).
+    pub weight_log_grad: S::Vec,
     /// ∇s (zero for rays whose length does not depend on x).
     pub grad_s: S::Vec,
     /// Distance s to where the ray ends.
@@ -42,7 +44,8 @@ impl<S: Space> UnawareRay<'_, S> {
         if self.end_radiance != Rgb::ZERO {
             for (c, acc) in single.iter_mut().enumerate() {
                 let v = self.weight[c] * (-self.sigma_t[c] * self.length).exp() * self.end_radiance[c];
-                *acc += Taylor2::new(v, self.grad_s * (-self.sigma_t[c] * v), zero);
+                let grad = self.grad_s * (-self.sigma_t[c] * v) + self.weight_log_grad * v;
+                *acc += Taylor2::new(v, grad, zero);
             }
         }
         let slides = S::dot(self.grad_s, self.grad_s) > 0.0;
@@ -60,7 +63,7 @@ impl<S: Space> UnawareRay<'_, S> {
                 } else {
                     0.0
                 };
-                *acc += Taylor2::new(v, self.grad_s * ds, zero);
+                *acc += Taylor2::new(v, self.grad_s * ds + self.weight_log_grad * v, zero);
             }
         }
     }

@@ -25,25 +25,17 @@ use super::scene::Scene;
 use super::scene_desc::Part;
 use crate::core::cache::{Cache, Record};
 use crate::core::color::{Rgb, luminance};
-use crate::core::metric::{Extent, MetricParams, first_order_extent, second_order_extent};
+use crate::core::metric::{MetricParams, hessian_radiance_floor};
 use crate::core::rng::mix64;
 use crate::core::space::D2;
-use crate::core::taylor::Taylor2;
 use crate::core::taylor_rgb::TaylorRgb;
 use crate::progress::{Cancelled, Progress};
 use glam::{DMat2, DVec2};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::collections::HashMap;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "snake_case")]
-pub enum CacheMethod {
-    /// Second-order occlusion-aware Hessian ellipses (the paper).
-    Ours,
-    /// First-order occlusion-unaware gradient circles (Jarosz et al. 2008).
-    Jarosz08,
-}
+pub use crate::core::metric::CacheMethod;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CacheSettings {
@@ -176,14 +168,9 @@ fn compute_record(
     })
 }
 
-/// Elements with `fraction` × their mean radiance added (metric Hessian only).
+/// Elements with the metric's radiance floor added (metric Hessian only).
 fn with_radiance_floor(elements: &[Element], fraction: f64) -> Vec<Element> {
-    if elements.is_empty() || fraction <= 0.0 {
-        return elements.to_vec();
-    }
-    let mean = elements.iter().map(|e| e.radiance).sum::<Rgb>() / elements.len() as f64;
-    // If every ray returned black, a unit radiance gives a purely geometric Hessian.
-    let floor = if mean == Rgb::ZERO { Rgb::ONE } else { mean * fraction };
+    let floor = hessian_radiance_floor(elements.iter().map(|e| e.radiance), fraction).unwrap_or(Rgb::ZERO);
     elements
         .iter()
         .map(|e| Element {
@@ -191,14 +178,6 @@ fn with_radiance_floor(elements: &[Element], fraction: f64) -> Vec<Element> {
             ..*e
         })
         .collect()
-}
-
-fn extent_of(value: &Payload, hess: DMat2, method: CacheMethod, metric: &MetricParams) -> Extent<D2> {
-    let lum: Taylor2<D2> = value.luminance();
-    match method {
-        CacheMethod::Ours => second_order_extent::<D2>(lum.value, hess, lum.grad, metric),
-        CacheMethod::Jarosz08 => first_order_extent::<D2>(lum.value, lum.grad, metric),
-    }
 }
 
 fn info(r: &Record<D2, Payload>) -> RecordInfo {
@@ -211,17 +190,17 @@ fn info(r: &Record<D2, Payload>) -> RecordInfo {
     }
 }
 
-/// Covering records of `y` that can see it: a record never extrapolates across a
-/// surface (the field jumps there). Appends (index, tent weight) to `out`.
+/// A record at x may be used at y: it sees y (a record never extrapolates across a
+/// surface, the field jumps there).
+fn sees(scene: &Scene, x: DVec2, y: DVec2) -> bool {
+    let d = y - x;
+    let len = d.length();
+    len == 0.0 || !scene.geometry.occluded(x, d / len, len, None)
+}
+
+/// Covering records of `y` that can see it, as (index, tent weight) in `out`.
 fn visible_covering(scene: &Scene, cache: &Cache<D2, Payload>, y: DVec2, out: &mut Vec<(usize, f64)>) {
-    out.clear();
-    cache.covering_into(y, out);
-    out.retain(|&(i, _)| {
-        let x = cache.records()[i].position;
-        let d = y - x;
-        let len = d.length();
-        len == 0.0 || !scene.geometry.occluded(x, d / len, len, None)
-    });
+    cache.covering_where(y, out, |x| sees(scene, x, y));
 }
 
 /// Weighted first- (or second-) order extrapolation from the visible covering
@@ -234,15 +213,9 @@ fn reconstruct(
     second_order: bool,
     scratch: &mut Vec<(usize, f64)>,
 ) -> Option<Rgb> {
-    use crate::core::cache::Interpolant;
-    visible_covering(scene, cache, y, scratch);
-    let (mut sum, mut wsum) = (Rgb::ZERO, 0.0);
-    for &(i, w) in scratch.iter() {
-        let r = &cache.records()[i];
-        sum += r.value.extrapolated(y - r.position, second_order) * w;
-        wsum += w;
-    }
-    (wsum > 0.0).then(|| (sum / wsum).max(Rgb::ZERO))
+    cache
+        .interpolate_where(y, second_order, scratch, |x| sees(scene, x, y))
+        .map(|v| v.max(Rgb::ZERO))
 }
 
 /// Place records and reconstruct the field of `fp.part` (direct evaluated per pixel).
@@ -297,7 +270,7 @@ pub fn render_cached(
         for c in uncovered {
             let q = quantities[c];
             let value = payload(d, q);
-            let extent = extent_of(&value, d.metric_hessians[q], cs.method, &metric);
+            let extent = cs.method.extent(&value.luminance(), d.metric_hessians[q], &metric);
             let record = Record {
                 position: x,
                 value,
@@ -373,7 +346,7 @@ pub fn render_cached(
     })
 }
 
-/// Equal-count mode: bisect ε (in log space) until placement makes `target`
+/// Equal-count mode: search ε (`core::equal_count`) until placement makes `target`
 /// records (±1%), reusing memoised light fields. Returns the final field and ε.
 pub fn render_with_count(
     scene: &Scene,
@@ -384,55 +357,8 @@ pub fn render_with_count(
     progress: &Progress,
 ) -> Result<(CachedField, f64), Cancelled> {
     let tol = (target as f64 * 0.01).max(1.0);
-    let try_eps = |eps: f64, memo: &mut RecordMemo| {
+    crate::core::equal_count::search_eps(target, tol, cs.eps, |eps| {
         let c = CacheSettings { eps, ..cs.clone() };
         render_cached(scene, fp, &c, memo, progress).map(|f| (f.record_count(), f))
-    };
-    // More records for smaller ε: bracket the target, then bisect.
-    let (mut lo, mut hi) = (cs.eps, cs.eps);
-    let mut best = try_eps(cs.eps, memo)?;
-    let mut best_eps = cs.eps;
-    let mut n_lo = best.0;
-    let mut n_hi = best.0;
-    for _ in 0..40 {
-        if n_lo >= target {
-            break;
-        }
-        lo /= 4.0;
-        let r = try_eps(lo, memo)?;
-        n_lo = r.0;
-        if (r.0 as f64 - target as f64).abs() < (best.0 as f64 - target as f64).abs() {
-            (best, best_eps) = (r, lo);
-        }
-    }
-    for _ in 0..40 {
-        if n_hi <= target {
-            break;
-        }
-        hi *= 4.0;
-        let r = try_eps(hi, memo)?;
-        n_hi = r.0;
-        if (r.0 as f64 - target as f64).abs() < (best.0 as f64 - target as f64).abs() {
-            (best, best_eps) = (r, hi);
-        }
-    }
-    for _ in 0..40 {
-        if (best.0 as f64 - target as f64).abs() <= tol {
-            break;
-        }
-        let mid = (lo * hi).sqrt();
-        let r = try_eps(mid, memo)?;
-        if r.0 > target {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if (r.0 as f64 - target as f64).abs() < (best.0 as f64 - target as f64).abs() {
-            (best, best_eps) = (r, mid);
-        }
-        if hi / lo < 1.0 + 1e-9 {
-            break;
-        }
-    }
-    Ok((best.1, best_eps))
+    })
 }

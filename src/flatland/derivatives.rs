@@ -337,6 +337,7 @@ pub fn unaware(lf: &LightField) -> PartDerivs {
         UnawareRay::<D2> {
             sigma_t: lf.sigma_t,
             weight: lf.sigma_s * (hg.eval(-lf.omega_o, r.dir) * dtheta),
+            weight_log_grad: DVec2::ZERO,
             // Rays cut in the medium have a length that does not depend on x.
             grad_s: r
                 .hit

@@ -17,7 +17,7 @@ use super::transport::{Settings, sample_lobe};
 use crate::core::color::Rgb;
 use crate::core::distance::distance;
 use crate::core::element::{medium_form_factor_smoothed, near_distance};
-use crate::core::phase::{Hg3, phase_taylor};
+use crate::core::phase::{phase_taylor_fixed_direction, phase_taylor_out};
 use crate::core::rng::Sampler;
 use crate::core::space::D3;
 use crate::core::taylor::Taylor2;
@@ -48,7 +48,7 @@ pub fn direct_derivatives(lf: &LightField) -> TaylorRgb<D3> {
                 transmittance,
             } => {
                 let r = (position - x).length().max(1e-300);
-                let phase = phase_taylor::<D3>(lf.g, x, position, lf.omega_o, 0.0);
+                let phase = phase_taylor_out::<D3>(lf.g, x, position, lf.outgoing(), 0.0);
                 let dist = distance::<D3>(x, position, 0.0);
                 let inv_r2 = dist.compose(1.0 / (r * r), -2.0 / (r * r * r), 6.0 / (r * r * r * r));
                 let t = [0, 1, 2].map(|c| {
@@ -68,7 +68,7 @@ pub fn direct_derivatives(lf: &LightField) -> TaylorRgb<D3> {
                 depth_grad,
                 transmittance,
             } => {
-                let f = Hg3::new(lf.g).eval(-lf.omega_o, to_sun);
+                let f = phase_taylor_fixed_direction::<D3>(lf.g, x, to_sun, lf.outgoing());
                 let t = [0, 1, 2].map(|c| {
                     let tr = transmittance[c];
                     let sig = if tr > 0.0 && depth > 0.0 { -tr.ln() / depth } else { 0.0 };
@@ -79,7 +79,7 @@ pub fn direct_derivatives(lf: &LightField) -> TaylorRgb<D3> {
                     );
                     Taylor2::new(tr, depth_grad * (-sig * tr), outer * (sig * sig * tr))
                 });
-                sum += TaylorRgb::tint(Taylor2::constant(f), irradiance * lf.sigma_s).mul_channels(t);
+                sum += TaylorRgb::tint(f, irradiance * lf.sigma_s).mul_channels(t);
             }
         }
     }
@@ -115,7 +115,7 @@ pub fn element_incident(lf: &LightField, e: &Element, medium_clamp: f64) -> Tayl
 /// One proxy element's contribution σ_s f T L F with its derivatives.
 pub fn element_contribution(lf: &LightField, e: &Element, medium_clamp: f64) -> TaylorRgb<D3> {
     let soft = near_distance(e.size());
-    let phase = phase_taylor::<D3>(lf.g, lf.x, e.anchor, lf.omega_o, soft);
+    let phase = phase_taylor_out::<D3>(lf.g, lf.x, e.anchor, lf.outgoing(), soft);
     element_incident(lf, e, medium_clamp).mul_channels([
         phase * lf.sigma_s.x,
         phase * lf.sigma_s.y,
@@ -158,16 +158,18 @@ pub fn aware(lf: &LightField, elements: &[Element], settings: &AwareSettings) ->
 /// have a fixed length. The measure and visibility are treated as constant. First
 /// order only.
 pub fn unaware(lf: &LightField) -> PartDerivs {
-    let hg = Hg3::new(lf.g);
     let domega = lf.ray_measure();
+    let out = lf.outgoing();
     let (mut single, mut multiple) = ([Taylor2::<D3>::zero(); 3], [Taylor2::<D3>::zero(); 3]);
     let mut samples = Vec::new();
     for r in &lf.rays {
         samples.clear();
         samples.extend(r.samples.iter().enumerate().map(|(i, l)| (lf.sample_depth(r, i), *l)));
+        let f = phase_taylor_fixed_direction::<D3>(lf.g, lf.x, r.dir, out);
         UnawareRay::<D3> {
             sigma_t: lf.sigma_t,
-            weight: lf.sigma_s * (hg.eval(-lf.omega_o, r.dir) * domega),
+            weight: lf.sigma_s * (f.value * domega),
+            weight_log_grad: if f.value > 0.0 { f.grad / f.value } else { DVec3::ZERO },
             grad_s: r
                 .hit
                 .map_or(DVec3::ZERO, |h| hit_distance_gradient::<D3>(h.normal, r.dir)),

@@ -4,23 +4,34 @@
 //! ray's surface hit with the radiance leaving it towards x, and ray-marched medium
 //! samples with recursive estimates of L_s.
 //!
-//! As in 2D: the march length is the distance to the hit, capped where the
-//! transmittance falls below `transmittance_cutoff` (and at `far_factor` × the scene
-//! size); medium sample i of ray k sits at depth (i + ξ_k)·Δt with the ray's own
-//! jitter ξ_k, so the i-th samples of neighbouring rays form shells. Delta lights
-//! (point lights, suns without a cone) are kept apart for the direct part.
+//! The march: every ray is cast first; the march length is the farthest point any
+//! ray still has medium in front of it (its hit, or where it leaves the medium box),
+//! capped where the transmittance falls below `transmittance_cutoff` and at
+//! `far_factor` × the scene size, and the step is that length over `steps` (so a
+//! room is sampled at room scale, not at the scale of the fog's mean free path).
+//! Medium sample i of ray k sits at depth (i + ξ_k)·Δt with the ray's own jitter ξ_k,
+//! so the i-th samples of neighbouring rays form shells.
 //!
-//! Escaped rays end at the cut length; they carry the sky and sun-cone radiance
-//! scaled by T_true / exp(−σ_t(x)·length), so that the proxy's homogeneous
-//! transmittance model gives the true value through a medium box (zero when that
-//! ratio is not representable).
+//! Lights kept apart for the direct part (theory.md §2): point lights and suns, with
+//! or without a cone. A sun's cone (0.27° for the real sun) is far narrower than the
+//! solid angle per ray (4π/N), so a probe ray would find it with a probability of a
+//! few percent and then carry a spike of 10⁴–10⁵ times the sky: it is evaluated as a
+//! directional light at the cone's centre instead. Escaped rays end at the cut
+//! length and carry the sky only, scaled by T_true / exp(−σ_t(x)·length), so that
+//! the proxy's homogeneous transmittance model gives the true value through a medium
+//! box (zero when that ratio is not representable).
+//!
+//! L_s is wanted towards a fixed direction ω_o, or towards a point (the camera of a
+//! 3D render: [`Outgoing::TowardsPoint`]), in which case ω_o turns with x and the
+//! derivatives include that turning.
 
-use super::lights::{Lobe, escaped_radiance};
+use super::lights::Lobe;
 use super::medium::Medium;
 use super::scene::Scene;
 use super::sphere::{fibonacci_directions, triangulate};
 use super::transport::{Settings, sample_lobe};
 use crate::core::color::Rgb;
+pub use crate::core::phase::Outgoing;
 use crate::core::rng::Sampler;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
@@ -104,8 +115,8 @@ pub enum DirectLight {
         intensity: Rgb,
         transmittance: Rgb,
     },
-    /// A sun without a cone: E·T, with the medium depth along `to_sun` and its
-    /// gradient in x (the exit face moves with x).
+    /// A sun (its cone, if any, taken at its centre): E·T, with the medium depth
+    /// along `to_sun` and its gradient in x (the exit face moves with x).
     Sun {
         to_sun: DVec3,
         irradiance: Rgb,
@@ -136,7 +147,7 @@ impl DirectLight {
                 });
             }
         }
-        for sun in scene.suns.iter().filter(|s| s.is_delta()) {
+        for sun in &scene.suns {
             let w = sun.to_sun;
             rays += 1;
             if scene.occluded(x, w, f64::INFINITY, None) {
@@ -177,8 +188,10 @@ impl DirectLight {
 #[derive(Clone, Debug, Serialize)]
 pub struct LightField {
     pub x: DVec3,
-    /// Direction L_s is wanted towards.
+    /// Direction L_s is wanted towards (at x, when it turns towards `eye`).
     pub omega_o: DVec3,
+    /// The point ω_o turns towards as x moves (a camera), if any.
+    pub eye: Option<DVec3>,
     pub rays: Vec<ProbeRay>,
     /// Outward-oriented triangles of the directions (indices into `rays`).
     pub triangles: Vec<[u32; 3]>,
@@ -200,22 +213,28 @@ impl LightField {
         (i as f64 + ray.offset) * self.step
     }
 
+    /// Where L_s leaves towards, for the derivative core.
+    pub fn outgoing(&self) -> Outgoing<DVec3> {
+        self.eye
+            .map_or(Outgoing::Direction(self.omega_o), Outgoing::TowardsPoint)
+    }
+
     /// The solid angle per ray, 4π/N.
     pub fn ray_measure(&self) -> f64 {
         4.0 * PI / self.rays.len() as f64
     }
 }
 
-/// The march length before transmittance drops below `cutoff`, and the step.
-fn march(medium: Option<&Medium>, scale: f64, ps: &ProbeSettings) -> (f64, f64) {
+/// The longest march before the transmittance drops below the cutoff (or the far
+/// limit).
+fn march_limit(medium: Option<&Medium>, scale: f64, ps: &ProbeSettings) -> f64 {
     let far = ps.far_factor * scale;
     let sig = medium.map_or(0.0, |m| m.sigma_t.min_element());
-    let t_cut = if sig > 0.0 {
+    if sig > 0.0 {
         (-ps.transmittance_cutoff.ln() / sig).min(far)
     } else {
         far
-    };
-    (t_cut, t_cut / ps.steps.max(1) as f64)
+    }
 }
 
 /// Capture the light field at `x` for L_s towards `omega_o`. Deterministic for
@@ -229,25 +248,55 @@ pub fn capture(
     item: u64,
     progress: &Progress,
 ) -> Result<LightField, Cancelled> {
+    capture_towards(scene, x, Outgoing::Direction(omega_o), ps, seed, item, progress)
+}
+
+/// [`capture`] for L_s towards a fixed direction or towards a point (a camera).
+pub fn capture_towards(
+    scene: &Scene,
+    x: DVec3,
+    out: Outgoing<DVec3>,
+    ps: &ProbeSettings,
+    seed: u64,
+    item: u64,
+    progress: &Progress,
+) -> Result<LightField, Cancelled> {
     let start = std::time::Instant::now();
+    let (omega_o, eye) = match out {
+        Outgoing::Direction(w) => (w, None),
+        Outgoing::TowardsPoint(e) => ((e - x).try_normalize().unwrap_or(DVec3::Z), Some(e)),
+    };
     let medium = scene.medium.as_ref();
     let at_x = scene.medium_at(x);
     let sigma_t_x = at_x.map_or(Rgb::ZERO, |m| m.sigma_t);
-    let (t_cut, step) = march(medium, scene.scale, ps);
+    let limit = march_limit(medium, scene.scale, ps);
     let n = ps.rays.max(4);
     let dir_seed = crate::core::rng::mix64(seed ^ crate::core::rng::mix64(item.wrapping_add(0x9e37)));
     let dirs = fibonacci_directions(n, ps.jitter, dir_seed);
     let triangles = triangulate(&dirs).expect("stratified directions triangulate");
+    // Pass 1: every ray's hit and how far it still has medium in front of it.
+    let hits: Vec<(Option<super::mesh::Hit>, f64)> = dirs
+        .par_iter()
+        .map(|&dir| {
+            let hit = scene.closest_hit(x, dir, f64::INFINITY, None);
+            let end = hit.map_or(limit, |h| h.t.min(limit));
+            let medium_end = medium.and_then(|m| m.interval(x, dir, end)).map_or(0.0, |(_, b)| b);
+            (hit, medium_end)
+        })
+        .collect();
+    let march_len = hits.iter().map(|h| h.1).fold(0.0, f64::max).min(limit);
+    let step = if march_len > 0.0 { march_len } else { limit } / ps.steps.max(1) as f64;
+    let t_cut = step * ps.steps.max(1) as f64;
     let paths = ps.paths.max(1);
     let rays: Vec<Result<(ProbeRay, u64), Cancelled>> = dirs
         .par_iter()
+        .zip(&hits)
         .enumerate()
-        .map(|(k, &dir)| {
+        .map(|(k, (&dir, &(hit, _)))| {
             progress.check()?;
             let mut s = Sampler::new2(seed, item, k as u64);
             let offset = s.next_f64();
             let mut rays = 1u64;
-            let hit = scene.closest_hit(x, dir, f64::INFINITY, None);
             let hit_record = hit.map(|h| {
                 let tri = &scene.triangles[h.tri as usize];
                 let surf = scene.surface(h.tri);
@@ -278,16 +327,11 @@ pub fn capture(
                 }
             });
             let length = hit.map_or(t_cut, |h| h.t);
-            let escaped = if hit.is_none() {
-                let sky = escaped_radiance(scene, dir, None);
-                if sky == Rgb::ZERO {
-                    Rgb::ZERO
-                } else {
-                    let t_true = medium.map_or(Rgb::ONE, |m| m.transmittance(x, dir, scene.world_exit(x, dir)));
-                    let t_model = (-sigma_t_x * length).exp();
-                    let ratio = Rgb::select(t_model.cmpgt(Rgb::splat(1e-200)), t_true / t_model, Rgb::ZERO);
-                    sky * ratio
-                }
+            let escaped = if hit.is_none() && scene.sky != Rgb::ZERO {
+                let t_true = medium.map_or(Rgb::ONE, |m| m.transmittance(x, dir, scene.world_exit(x, dir)));
+                let t_model = (-sigma_t_x * length).exp();
+                let ratio = Rgb::select(t_model.cmpgt(Rgb::splat(1e-200)), t_true / t_model, Rgb::ZERO);
+                scene.sky * ratio
             } else {
                 Rgb::ZERO
             };
@@ -339,6 +383,7 @@ pub fn capture(
     Ok(LightField {
         x,
         omega_o,
+        eye,
         rays: out,
         triangles,
         step,
