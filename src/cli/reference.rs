@@ -24,12 +24,7 @@ pub struct ReferenceInfo {
     pub from_disk: bool,
 }
 
-/// FNV-1a: a stable hash (unlike std's, it does not change between Rust versions).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
-}
+use volcache::core::rng::fnv1a;
 
 pub fn reference_key(scene: &Scene, fp: &FieldParams) -> String {
     let text = format!(

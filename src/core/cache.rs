@@ -239,6 +239,19 @@ impl<S: Space, V> Cache<S, V> {
         covered
     }
 
+    /// Some record whose position passes `keep` covers y (`keep` is called only
+    /// until one is found).
+    pub fn is_covered_where(&self, y: S::Vec, mut keep: impl FnMut(S::Vec) -> bool) -> bool {
+        let mut covered = false;
+        self.index.for_candidates(to_array::<S>(y), S::DIM, |id| {
+            if !covered {
+                let (x, e) = &self.shapes[id as usize];
+                covered = e.contains(*x, y) && keep(*x);
+            }
+        });
+        covered
+    }
+
     /// Number of (cell, record) entries in the index, for diagnostics.
     pub fn index_entries(&self) -> usize {
         self.index.entries()
@@ -305,6 +318,26 @@ impl<S: Space, V: Interpolant<S>> Cache<S, V> {
             out
         })
     }
+}
+
+/// The order placement visits the pixels of a width × height grid (row-major
+/// indices): coarse to fine (strides 16, 8, 4, 2, 1), so early records are spread
+/// over the image rather than piled up along its top rows.
+pub fn placement_order(width: usize, height: usize) -> Vec<usize> {
+    let mut seen = vec![false; width * height];
+    let mut order = Vec::with_capacity(width * height);
+    for stride in [16, 8, 4, 2, 1] {
+        for j in (0..height).step_by(stride) {
+            for i in (0..width).step_by(stride) {
+                let k = j * width + i;
+                if !seen[k] {
+                    seen[k] = true;
+                    order.push(k);
+                }
+            }
+        }
+    }
+    order
 }
 
 fn to_array<S: Space>(v: S::Vec) -> [f64; 3] {

@@ -13,6 +13,14 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// FNV-1a: a stable hash of bytes (unlike std's, it does not change between Rust
+/// versions), for keys of files that must match across runs.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
 /// A random stream for one work item (pixel, probe point, sample index...).
 pub struct Sampler {
     rng: Pcg64Mcg,

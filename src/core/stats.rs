@@ -40,6 +40,41 @@ pub fn rmse(a: &[f64], b: &[f64]) -> f64 {
     (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
 }
 
+/// Errors of an image (or field) against a reference, over the pixels compared
+/// (luminance).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ImageErrors {
+    pub rmse: f64,
+    /// Mean of (a − b)² / (b² + 0.01·mean(b)²): relative, robust where b → 0.
+    pub relmse: f64,
+    pub max_abs: f64,
+    pub mean_reference: f64,
+    pub pixels: usize,
+}
+
+impl ImageErrors {
+    /// From (test, reference) luminance pairs; all zero for none.
+    pub fn of_luminance_pairs(pairs: &[(f64, f64)]) -> Self {
+        if pairs.is_empty() {
+            return ImageErrors::default();
+        }
+        let n = pairs.len() as f64;
+        let mean_ref = pairs.iter().map(|p| p.1).sum::<f64>() / n;
+        let floor = 0.01 * mean_ref * mean_ref;
+        ImageErrors {
+            rmse: (pairs.iter().map(|(a, b)| (a - b).powi(2)).sum::<f64>() / n).sqrt(),
+            relmse: pairs
+                .iter()
+                .map(|(a, b)| (a - b).powi(2) / (b * b + floor).max(f64::MIN_POSITIVE))
+                .sum::<f64>()
+                / n,
+            max_abs: pairs.iter().map(|(a, b)| (a - b).abs()).fold(0.0, f64::max),
+            mean_reference: mean_ref,
+            pixels: pairs.len(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

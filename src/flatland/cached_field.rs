@@ -122,24 +122,7 @@ impl CachedField {
 
 type Payload = TaylorRgb<D2>;
 
-/// The order placement visits pixels: coarse to fine (strides 16, 8, 4, 2, 1), so
-/// early records are spread over the field rather than piled up along its top rows.
-pub fn placement_order(width: usize, height: usize) -> Vec<usize> {
-    let mut seen = vec![false; width * height];
-    let mut order = Vec::with_capacity(width * height);
-    for stride in [16, 8, 4, 2, 1] {
-        for j in (0..height).step_by(stride) {
-            for i in (0..width).step_by(stride) {
-                let k = j * width + i;
-                if !seen[k] {
-                    seen[k] = true;
-                    order.push(k);
-                }
-            }
-        }
-    }
-    order
-}
+pub use crate::core::cache::placement_order;
 
 fn compute_record(
     scene: &Scene,

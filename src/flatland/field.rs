@@ -186,15 +186,7 @@ pub fn render_field(scene: &Scene, params: &FieldParams, progress: &Progress) ->
 }
 
 /// Errors of a field against a reference, over pixels valid in both (luminance).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct FieldErrors {
-    pub rmse: f64,
-    /// Mean of (a − b)² / (b² + 0.01·mean(b)²): relative, robust where b → 0.
-    pub relmse: f64,
-    pub max_abs: f64,
-    pub mean_reference: f64,
-    pub pixels: usize,
-}
+pub use crate::core::stats::ImageErrors as FieldErrors;
 
 /// RMSE, relMSE and max error of `test` against `reference` (same grid).
 pub fn field_errors(test: &Field, reference: &Field) -> FieldErrors {
@@ -211,21 +203,5 @@ pub fn field_errors(test: &Field, reference: &Field) -> FieldErrors {
         .filter(|(_, (a, b))| **a && **b)
         .map(|((a, b), _)| (luminance(*a), luminance(*b)))
         .collect();
-    if pairs.is_empty() {
-        return FieldErrors::default();
-    }
-    let n = pairs.len() as f64;
-    let mean_ref = pairs.iter().map(|p| p.1).sum::<f64>() / n;
-    let floor = 0.01 * mean_ref * mean_ref;
-    FieldErrors {
-        rmse: (pairs.iter().map(|(a, b)| (a - b).powi(2)).sum::<f64>() / n).sqrt(),
-        relmse: pairs
-            .iter()
-            .map(|(a, b)| (a - b).powi(2) / (b * b + floor).max(f64::MIN_POSITIVE))
-            .sum::<f64>()
-            / n,
-        max_abs: pairs.iter().map(|(a, b)| (a - b).abs()).fold(0.0, f64::max),
-        mean_reference: mean_ref,
-        pixels: pairs.len(),
-    }
+    FieldErrors::of_luminance_pairs(&pairs)
 }

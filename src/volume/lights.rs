@@ -252,6 +252,27 @@ pub fn emitter_nee(
     value * surf.emission * transmittance(scene, p, w, r) * (weight / pdf_light)
 }
 
+/// The direct part of L_s (theory.md §2) at a medium point: delta lights and suns
+/// with a cone, one cone sample each. No MIS: a radiance cache's probe rays leave
+/// sun cones to this part (see `probe`), so no other strategy samples them.
+pub fn direct_part(scene: &Scene, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: &mut u64) -> Rgb {
+    let mut sum = delta_lights(scene, p, lobe, None, rays);
+    for sun in scene.suns.iter().filter(|s| !s.is_delta()) {
+        let (u1, u2) = (s.next_f64(), s.next_f64());
+        let w = sample_cone(sun.to_sun, sun.cos_max, u1, u2);
+        let (value, _) = lobe.eval(w);
+        if value == Rgb::ZERO {
+            continue;
+        }
+        *rays += 1;
+        if !scene.occluded(p, w, f64::INFINITY, None) {
+            // Uniform in the cone: radiance / pdf = radiance × solid angle = E.
+            sum += value * sun.radiance * sun.solid_angle() * transmittance_to_infinity(scene, p, w);
+        }
+    }
+    sum
+}
+
 /// All NEE at a vertex: delta lights, distant lights with a solid angle, emitters.
 pub fn all_nee(
     scene: &Scene,

@@ -1,11 +1,15 @@
-//! The 3D renderer (issue 6, first half): scenes of quads, boxes and OBJ meshes with
-//! diffuse materials, point / sun / sky / area lights and a homogeneous medium;
-//! an f64 binned-SAH BVH; the reference volumetric path tracer and image rendering.
+//! The 3D renderer: scenes of quads, boxes and OBJ meshes with diffuse materials,
+//! point / sun / sky / area lights and a homogeneous medium; an f64 binned-SAH BVH;
+//! the reference volumetric path tracer; and radiance caching on the shared core.
 //!
 //! scene_desc (JSON) → validate → scene (triangles, BVH, lights, medium) →
-//! transport (path tracer) → render (progressive image).
+//! transport (path tracer) → render (progressive image), or
+//! camera_march (query points) → cached (placement: probe → proxy → derivatives →
+//! core::metric / core::cache; reconstruction) → records_file (shared by tiles).
 
 pub mod bvh;
+pub mod cached;
+pub mod camera_march;
 pub mod camera;
 pub mod derivatives;
 pub mod lights;
@@ -13,6 +17,7 @@ pub mod medium;
 pub mod mesh;
 pub mod probe;
 pub mod proxy;
+pub mod records_file;
 pub mod render;
 pub mod scene;
 pub mod scene_desc;

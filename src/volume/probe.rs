@@ -29,7 +29,7 @@ use super::lights::Lobe;
 use super::medium::Medium;
 use super::scene::Scene;
 use super::sphere::{fibonacci_directions, triangulate};
-use super::transport::{Settings, sample_lobe};
+use super::transport::{Settings, radiance_leaving_hit, sample_lobe};
 use crate::core::color::Rgb;
 pub use crate::core::phase::Outgoing;
 use crate::core::rng::Sampler;
@@ -298,32 +298,13 @@ pub fn capture_towards(
             let offset = s.next_f64();
             let mut rays = 1u64;
             let hit_record = hit.map(|h| {
-                let tri = &scene.triangles[h.tri as usize];
-                let surf = scene.surface(h.tri);
-                let facing = tri.normal.dot(dir) < 0.0;
-                let active = facing || surf.two_sided;
-                let normal = if facing { tri.normal } else { -tri.normal };
-                let point = tri.point_at(h.u, h.v);
-                let mut l = Rgb::ZERO;
-                if active {
-                    l += surf.emission;
-                    if surf.reflectance != Rgb::ZERO {
-                        let lobe = Lobe::Lambert {
-                            normal,
-                            reflectance: surf.reflectance,
-                        };
-                        let mut sum = Rgb::ZERO;
-                        for _ in 0..paths {
-                            sum += sample_lobe(scene, point, &lobe, Some(h.tri), &ps.settings, &mut s, &mut rays);
-                        }
-                        l += sum / paths as f64;
-                    }
-                }
+                let (point, normal, radiance) =
+                    radiance_leaving_hit(scene, &h, dir, paths, &ps.settings, &mut s, &mut rays);
                 SurfaceHit {
                     point,
                     tri: h.tri,
                     normal,
-                    radiance: l,
+                    radiance,
                 }
             });
             let length = hit.map_or(t_cut, |h| h.t);

@@ -9,7 +9,7 @@
 
 use super::camera::Camera;
 use super::scene::Scene;
-use super::transport::{Settings, radiance_path};
+use super::transport::{Settings, radiance_path_split};
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::Sampler;
 use crate::progress::{Cancelled, Progress};
@@ -62,6 +62,9 @@ pub struct Rendered {
     pub width: usize,
     pub height: usize,
     pub values: Vec<Rgb>,
+    /// The part of `values` in-scattered by the medium along the camera rays
+    /// (∫ T L_s dt); the rest is light from surfaces and the sky (T L_o).
+    pub medium: Vec<Rgb>,
     /// Per pixel standard error of the luminance.
     pub std_error: Vec<f64>,
     /// Samples per pixel actually taken.
@@ -108,8 +111,8 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
     let (w, h) = (x1 - x0, y1 - y0);
     let schedule = passes(params.spp);
     progress.start((h * schedule.len()) as u64);
-    // Per pixel: Σ radiance, Σ luminance, Σ luminance², rays.
-    let mut acc = vec![(Rgb::ZERO, 0.0, 0.0); w * h];
+    // Per pixel: Σ radiance, Σ luminance, Σ luminance², Σ medium part.
+    let mut acc = vec![(Rgb::ZERO, 0.0, 0.0, Rgb::ZERO); w * h];
     // Seconds per sample of the last pass predict the next one.
     let (mut rays, mut done, mut per_sample) = (0u64, 0u32, 0.0f64);
     for &(k0, k1) in &schedule {
@@ -136,7 +139,7 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
                     for k in k0..k1 {
                         let mut s = Sampler::new2(params.seed, item, k as u64);
                         let p = DVec2::new(i as f64 + s.next_f64(), j as f64 + s.next_f64());
-                        let l = radiance_path(
+                        let (l, scattered) = radiance_path_split(
                             scene,
                             cam.position,
                             cam.direction(p),
@@ -147,7 +150,8 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
                             &mut r,
                         );
                         let y = luminance(l);
-                        *a = (a.0 + l, a.1 + y, a.2 + y * y);
+                        let m = if scattered { l } else { Rgb::ZERO };
+                        *a = (a.0 + l, a.1 + y, a.2 + y * y, a.3 + m);
                     }
                 }
                 progress.advance(1);
@@ -160,6 +164,7 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
     }
     let n = done.max(1) as f64;
     let values = acc.iter().map(|a| a.0 / n).collect();
+    let medium = acc.iter().map(|a| a.3 / n).collect();
     let std_error = acc
         .iter()
         .map(|a| {
@@ -171,6 +176,7 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
         width: w,
         height: h,
         values,
+        medium,
         std_error,
         spp: done,
         rays,

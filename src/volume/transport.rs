@@ -50,7 +50,26 @@ pub fn radiance_path(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Rgb {
+    radiance_path_split(scene, start, dir, skip, lobe_pdf, settings, s, rays).0
+}
+
+/// [`radiance_path`], also telling whether the path's first event was a scattering
+/// in the medium: then everything it carries is in-scattered light along the first
+/// segment (∫ T L_s dt), otherwise it is light from the first surface or the sky
+/// (T L_o). Camera paths split an image into its medium and surface parts this way.
+#[allow(clippy::too_many_arguments)] // the path state is spelled out
+pub fn radiance_path_split(
+    scene: &Scene,
+    start: DVec3,
+    dir: DVec3,
+    skip: Option<u32>,
+    lobe_pdf: Option<f64>,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> (Rgb, bool) {
     let (mut p, mut dir, mut skip, mut pdf_prev) = (start, dir, skip, lobe_pdf);
+    let mut scattered_first = false;
     let mut beta = Rgb::ONE;
     let mut l = Rgb::ZERO;
     for depth in 1..=settings.max_depth {
@@ -64,6 +83,7 @@ pub fn radiance_path(
         };
         let lobe = match flight {
             Flight::Scatter { t, weight } => {
+                scattered_first |= depth == 1;
                 beta *= weight;
                 p += dir * t;
                 skip = None;
@@ -118,7 +138,7 @@ pub fn radiance_path(
             break;
         }
     }
-    l
+    (l, scattered_first)
 }
 
 /// One sample of ∫ value(ω) L_i(x, ω) dω for a lobe at `x` (on triangle `skip`, if
@@ -138,6 +158,44 @@ pub fn sample_lobe(
         return nee;
     }
     nee + weight * radiance_path(scene, x, w, skip, Some(pdf), settings, s, rays)
+}
+
+/// The radiance leaving the surface point of `hit` back along `dir` (the ray that
+/// found it): emission on an active side plus `paths` samples of the reflected
+/// light (NEE and a BRDF-sampled path each). Returns the point, the unit normal on
+/// the side facing the ray, and the radiance (zero on the inactive back of a
+/// one-sided surface).
+pub fn radiance_leaving_hit(
+    scene: &Scene,
+    hit: &super::mesh::Hit,
+    dir: DVec3,
+    paths: u32,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> (DVec3, DVec3, Rgb) {
+    let tri = &scene.triangles[hit.tri as usize];
+    let surf = scene.surface(hit.tri);
+    let facing = tri.normal.dot(dir) < 0.0;
+    let normal = if facing { tri.normal } else { -tri.normal };
+    let point = tri.point_at(hit.u, hit.v);
+    let mut l = Rgb::ZERO;
+    if facing || surf.two_sided {
+        l += surf.emission;
+        if surf.reflectance != Rgb::ZERO {
+            let lobe = Lobe::Lambert {
+                normal,
+                reflectance: surf.reflectance,
+            };
+            let paths = paths.max(1);
+            let mut sum = Rgb::ZERO;
+            for _ in 0..paths {
+                sum += sample_lobe(scene, point, &lobe, Some(hit.tri), settings, s, rays);
+            }
+            l += sum / paths as f64;
+        }
+    }
+    (point, normal, l)
 }
 
 /// One sample of the irradiance ∫ L_i(x, ω) max(0, n·ω) dω on a virtual sensor at

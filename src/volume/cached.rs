@@ -1,0 +1,523 @@
+//! Radiance caching in 3D (theory.md §6–8): records placed where camera rays march
+//! through the medium, and the image reconstructed from them.
+//!
+//! What is cached: the single + multiple scattered L_s of theory.md §2 towards the
+//! camera. With a pinhole camera, ω_o at a medium point x is the direction from x
+//! to the camera, so the cached quantity is a function of x alone and its
+//! derivatives include the turning of ω_o (`Outgoing::TowardsPoint`); an isotropic
+//! medium pays nothing for it. The direct part (point lights, suns with or without a
+//! cone) is sampled at every march point, never cached: it is singular at shadow
+//! edges and costs one shadow ray. Light from surfaces seen by the camera (T L_o)
+//! is path traced per camera sample, as in the reference.
+//!
+//! Placement walks the query points of the window ([`super::camera_march`]: every
+//! camera sample's march points) pixel by pixel in a coarse-to-fine order and
+//! creates a record wherever no record that sees the point covers it, so the
+//! reconstruction has no holes. Batches of pixels are checked in parallel against
+//! the cache as it was at the batch's start, then their uncovered points are
+//! re-checked and filled in order: the result does not depend on the thread count.
+//! Each record's light field is captured in parallel over its rays. Methods:
+//! - `ours`: occlusion-aware value, gradient and Hessian (`derivatives::aware`),
+//!   extent = the seed's Hessian ellipsoid;
+//! - `jarosz08`: occlusion-unaware value and gradient, extent = the gradient ball.
+//!
+//! Light fields are memoised per query point ([`RecordMemo`]) with the seconds they
+//! took, so an equal-count search pays for each point once and a placement's time
+//! is still what a fresh placement would take (checks plus its records' capture).
+
+use super::camera_march::{CameraRay, QueryKey};
+use super::derivatives::{AwareSettings, aware, unaware};
+use super::lights::{Lobe, direct_part, escaped_radiance};
+use super::probe::{Outgoing, ProbeSettings, capture_towards};
+use super::proxy::{self, Element};
+use super::render::{RenderParams, Rendered, camera};
+use super::scene::Scene;
+use super::transport::{radiance_leaving_hit, sample_lobe};
+use crate::core::cache::{Cache, Record, placement_order};
+use crate::core::color::{Rgb, luminance};
+use crate::core::metric::{CacheMethod, MetricParams, hessian_radiance_floor};
+use crate::core::rng::{Sampler, mix64};
+use crate::core::space::D3;
+use crate::core::taylor_rgb::TaylorRgb;
+use crate::progress::{Cancelled, Progress};
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// Pixels checked in parallel before their uncovered points are filled in order.
+/// A constant, so that placement does not depend on the thread count.
+const BATCH_PIXELS: usize = 64;
+
+/// How a cache is built.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CacheSettings {
+    pub method: CacheMethod,
+    /// Error threshold ε (theory.md §6: length³ for ours, dimensionless for jarosz08).
+    pub eps: f64,
+    pub probe: ProbeSettings,
+    pub aware: AwareSettings,
+    /// Second-order interpolation (ours only; the baseline has no Hessian).
+    pub second_order: bool,
+    /// Fraction of the mean element radiance added before the metric's Hessian.
+    pub hessian_floor: f64,
+    /// Seed of the records' light fields.
+    pub seed: u64,
+}
+
+impl CacheSettings {
+    pub fn new(method: CacheMethod, eps: f64) -> Self {
+        CacheSettings {
+            method,
+            eps,
+            probe: ProbeSettings::default(),
+            aware: AwareSettings::default(),
+            second_order: false,
+            hessian_floor: 0.01,
+            seed: 1,
+        }
+    }
+
+    /// A starting ε for a scene: ours' ε is a volume (scaled with the scene), the
+    /// baseline's a fraction.
+    pub fn default_eps(method: CacheMethod, scene: &Scene) -> f64 {
+        match method {
+            CacheMethod::Ours => 1e-4 * scene.scale.powi(3),
+            CacheMethod::Jarosz08 => 0.1,
+        }
+    }
+
+    pub fn metric(&self, scene: &Scene) -> MetricParams {
+        MetricParams::scene_relative(scene.scale, self.eps)
+    }
+}
+
+/// The image a cached render covers and how camera rays are marched.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CachedRenderParams {
+    /// Size, window, camera samples per pixel, seed, path settings (no time budget).
+    pub image: RenderParams,
+    /// Distance Δ between march points along camera rays (scene units).
+    pub march_step: f64,
+    /// Reflected-light samples (NEE + a path each) per camera sample at the first
+    /// surface: surfaces are path traced as in the reference, at a cost far below
+    /// a record's, so they need not be the noise floor of a cached image.
+    pub surface_paths: u32,
+}
+
+impl CachedRenderParams {
+    pub fn from_scene(scene: &Scene) -> Self {
+        CachedRenderParams {
+            image: RenderParams::from_scene(scene),
+            march_step: scene.scale / 128.0,
+            surface_paths: 4,
+        }
+    }
+}
+
+/// What one light field gives a record, kept to re-derive extents for another ε.
+#[derive(Clone, Debug)]
+pub struct RecordData {
+    /// Single + multiple scattered L_s towards the camera, with derivatives.
+    pub value: TaylorRgb<D3>,
+    /// Luminance Hessian the metric uses (with the radiance floor; zero for jarosz08).
+    pub metric_hessian: DMat3,
+    pub rays: u64,
+    /// Wall time of the capture and derivatives.
+    pub seconds: f64,
+}
+
+/// Light fields per query point, shared by placements of the same scene, method,
+/// probe settings and image.
+pub type RecordMemo = HashMap<QueryKey, RecordData>;
+
+pub type RadianceCache = Cache<D3, TaylorRgb<D3>>;
+
+/// A placed cache and what placing it cost.
+#[derive(Clone, Debug)]
+pub struct Placement {
+    pub cache: RadianceCache,
+    pub eps: f64,
+    /// Query points visited (every march point of every camera sample).
+    pub query_points: u64,
+    /// Rays of the records' light fields plus the visibility tests of the checks.
+    pub rays: u64,
+    /// Coverage checks plus the capture time of every record used.
+    pub seconds: f64,
+}
+
+/// One record, for figures and JSON.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RecordInfo {
+    pub position: DVec3,
+    /// Unit axes of the extent and their radii.
+    pub axes: [DVec3; 3],
+    pub radii: [f64; 3],
+    pub luminance: f64,
+    pub rays: u64,
+}
+
+impl Placement {
+    pub fn records(&self) -> Vec<RecordInfo> {
+        self.cache
+            .records()
+            .iter()
+            .map(|r| RecordInfo {
+                position: r.position,
+                axes: [r.extent.axes.x_axis, r.extent.axes.y_axis, r.extent.axes.z_axis],
+                radii: r.extent.radii.to_array(),
+                luminance: luminance(r.value.value()),
+                rays: r.cost_rays,
+            })
+            .collect()
+    }
+}
+
+/// A record at x may be used at y: it sees y (a record never extrapolates across a
+/// surface, where radiance jumps).
+fn sees(scene: &Scene, x: DVec3, y: DVec3, rays: &mut u64) -> bool {
+    let d = y - x;
+    let len = d.length();
+    if len == 0.0 {
+        return true;
+    }
+    *rays += 1;
+    !scene.occluded(x, d / len, len, None)
+}
+
+/// Elements with the metric's radiance floor added (metric Hessian only).
+fn with_radiance_floor(elements: &[Element], fraction: f64) -> Vec<Element> {
+    let floor = hessian_radiance_floor(elements.iter().map(|e| e.radiance), fraction).unwrap_or(Rgb::ZERO);
+    elements
+        .iter()
+        .map(|e| Element {
+            radiance: e.radiance + floor,
+            ..*e
+        })
+        .collect()
+}
+
+/// The light field at query point `y` and what the method derives from it.
+pub fn compute_record(
+    scene: &Scene,
+    y: DVec3,
+    eye: DVec3,
+    cs: &CacheSettings,
+    key: QueryKey,
+    progress: &Progress,
+) -> Result<RecordData, Cancelled> {
+    let start = Instant::now();
+    let id = mix64(((key.0 as u64) << 32) | key.1 as u64) ^ key.2 as u64;
+    let seed = mix64(cs.seed ^ mix64(id));
+    let lf = capture_towards(scene, y, Outgoing::TowardsPoint(eye), &cs.probe, seed, 0, progress)?;
+    let (value, metric_hessian) = match cs.method {
+        CacheMethod::Ours => {
+            let elements = proxy::build(&lf, cs.aware.rule);
+            let parts = aware(&lf, &elements, &cs.aware);
+            let floored = aware(&lf, &with_radiance_floor(&elements, cs.hessian_floor), &cs.aware);
+            (
+                parts.single + parts.multiple,
+                (floored.single + floored.multiple).luminance().hess,
+            )
+        }
+        CacheMethod::Jarosz08 => {
+            let parts = unaware(&lf);
+            (parts.single + parts.multiple, DMat3::ZERO)
+        }
+    };
+    Ok(RecordData {
+        value,
+        metric_hessian,
+        rays: lf.cost_rays,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The window's full-image pixel indices in placement order.
+fn window_order(p: &RenderParams) -> Vec<usize> {
+    let [x0, y0, x1, y1] = p.window();
+    let (w, h) = (x1 - x0, y1 - y0);
+    placement_order(w, h)
+        .into_iter()
+        .map(|k| (y0 + k / w) * p.width + x0 + k % w)
+        .collect()
+}
+
+/// Place records over every query point of the window (see the module docs).
+pub fn place(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cs: &CacheSettings,
+    memo: &mut RecordMemo,
+    progress: &Progress,
+) -> Result<Placement, Cancelled> {
+    let start = Instant::now();
+    let ip = &params.image;
+    let cam = camera(scene, ip.width, ip.height);
+    let metric = cs.metric(scene);
+    let order = window_order(ip);
+    progress.start(order.len() as u64);
+    let mut cache = RadianceCache::new();
+    let (mut query_points, mut rays, mut records_seconds, mut capture_wall) = (0u64, 0u64, 0.0, 0.0);
+    for batch in order.chunks(BATCH_PIXELS) {
+        progress.check()?;
+        // Points not covered by the cache as it is now, in order, with the checks' rays.
+        let pending: Vec<(Vec<(QueryKey, DVec3)>, u64, u64)> = batch
+            .par_iter()
+            .map(|&pixel| {
+                let (mut out, mut n, mut r) = (Vec::new(), 0u64, 0u64);
+                for k in 0..ip.spp {
+                    let (ray, _) = CameraRay::trace(scene, &cam, pixel, k, ip.seed);
+                    for (i, t) in ray.march(params.march_step) {
+                        let y = ray.at(t);
+                        n += 1;
+                        if !cache.is_covered_where(y, |x| sees(scene, x, y, &mut r)) {
+                            out.push(((pixel as u32, k, i as u32), y));
+                        }
+                    }
+                }
+                (out, n, r)
+            })
+            .collect();
+        for (points, n, r) in pending {
+            query_points += n;
+            rays += r;
+            for (key, y) in points {
+                if cache.is_covered_where(y, |x| sees(scene, x, y, &mut rays)) {
+                    continue;
+                }
+                let d = match memo.entry(key) {
+                    std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+                    std::collections::hash_map::Entry::Vacant(e) => {
+                        let t = Instant::now();
+                        let d = compute_record(scene, y, cam.position, cs, key, progress)?;
+                        capture_wall += t.elapsed().as_secs_f64();
+                        e.insert(d)
+                    }
+                };
+                rays += d.rays;
+                records_seconds += d.seconds;
+                let record = Record {
+                    position: y,
+                    value: d.value,
+                    extent: cs.method.extent(&d.value.luminance(), d.metric_hessian, &metric),
+                    cost_rays: d.rays,
+                };
+                // A non-finite light field is refused by the cache: the point stays
+                // uncovered (reported by the reconstruction) rather than failing.
+                let _ = cache.insert(record);
+            }
+        }
+        progress.advance(batch.len() as u64);
+    }
+    Ok(Placement {
+        cache,
+        eps: cs.eps,
+        query_points,
+        rays,
+        seconds: start.elapsed().as_secs_f64() - capture_wall + records_seconds,
+    })
+}
+
+/// Equal-count mode: search ε (`core::equal_count`) until placement makes `target`
+/// records (±1%), reusing memoised light fields.
+pub fn place_with_count(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cs: &CacheSettings,
+    target: usize,
+    memo: &mut RecordMemo,
+    progress: &Progress,
+) -> Result<Placement, Cancelled> {
+    let tol = (target as f64 * 0.01).max(1.0);
+    let (placement, _) = crate::core::equal_count::search_eps(target, tol, cs.eps, |eps| {
+        let c = CacheSettings { eps, ..cs.clone() };
+        place(scene, params, &c, memo, progress).map(|p| (p.cache.len(), p))
+    })?;
+    Ok(placement)
+}
+
+/// A reconstructed image and its cost.
+#[derive(Clone, Debug)]
+pub struct Reconstruction {
+    pub image: Rendered,
+    /// Query points no visible record covered (zero after a placement of the same
+    /// window; a tile rendered with another window's records may have some).
+    pub uncovered: u64,
+}
+
+/// Render the window from the cache: per camera sample, T L_o at the first surface
+/// (path traced) plus Σ_n T(t_n) Δ [σ_s·direct + cached L_s] over its march points.
+pub fn reconstruct(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cache: &RadianceCache,
+    second_order: bool,
+    progress: &Progress,
+) -> Result<Reconstruction, Cancelled> {
+    // Each row's clone of the closure has its own scratch buffer.
+    let mut scratch: Vec<(usize, f64)> = Vec::new();
+    march_image(scene, params, progress, move |p, lobe, sigma_s, s, rays| {
+        let direct = direct_part(scene, p, lobe, s, rays) * sigma_s;
+        let cached = cache.interpolate_where(p, second_order, &mut scratch, |x| sees(scene, x, p, rays));
+        cached.map(|c| direct + c.max(Rgb::ZERO))
+    })
+}
+
+/// The same image with L_s path traced at every march point (`paths` samples, all
+/// parts) instead of cached: the same camera rays, march points and surface samples
+/// as [`reconstruct`] with the same parameters, so the difference between the two
+/// is the cache's error alone (common random numbers), up to this estimate's noise.
+pub fn march_reference(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    paths: u32,
+    progress: &Progress,
+) -> Result<Reconstruction, Cancelled> {
+    let paths = paths.max(1);
+    march_image(scene, params, progress, |p, lobe, sigma_s, s, rays| {
+        let mut sum = Rgb::ZERO;
+        for _ in 0..paths {
+            sum += sample_lobe(scene, p, lobe, None, &params.image.settings, s, rays);
+        }
+        Some(sum * sigma_s / paths as f64)
+    })
+}
+
+/// The camera-march image with L_s(p) towards the camera from `l_s(p, phase lobe,
+/// σ_s, stream, rays)` (None: not covered, counted and taken as zero).
+fn march_image<F>(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    progress: &Progress,
+    l_s: F,
+) -> Result<Reconstruction, Cancelled>
+where
+    F: FnMut(DVec3, &Lobe, Rgb, &mut Sampler, &mut u64) -> Option<Rgb> + Clone + Send + Sync,
+{
+    let start = Instant::now();
+    let ip = &params.image;
+    let cam = camera(scene, ip.width, ip.height);
+    let [x0, y0, x1, y1] = ip.window();
+    let (w, h) = (x1 - x0, y1 - y0);
+    let spp = ip.spp.max(1);
+    progress.start(h as u64);
+    type Pixel = (Rgb, Rgb, f64, f64); // Σ total, Σ medium part, Σ lum, Σ lum²
+    let rows: Vec<Result<(Vec<Pixel>, u64, u64), Cancelled>> = (y0..y1)
+        .into_par_iter()
+        .map(|j| {
+            let mut l_s = l_s.clone();
+            let (mut rays, mut uncovered) = (0u64, 0u64);
+            let mut row = Vec::with_capacity(w);
+            for i in x0..x1 {
+                progress.check()?;
+                let pixel = j * ip.width + i;
+                let mut acc: Pixel = (Rgb::ZERO, Rgb::ZERO, 0.0, 0.0);
+                for k in 0..spp {
+                    let (ray, mut s) = CameraRay::trace(scene, &cam, pixel, k, ip.seed);
+                    rays += 1;
+                    let end = ray.hit.map_or_else(|| scene.world_exit(ray.origin, ray.dir), |h| h.t);
+                    let t_end = scene
+                        .medium
+                        .as_ref()
+                        .map_or(Rgb::ONE, |m| m.transmittance(ray.origin, ray.dir, end));
+                    let surface = t_end
+                        * match &ray.hit {
+                            Some(hit) => {
+                                let paths = params.surface_paths;
+                                radiance_leaving_hit(scene, hit, ray.dir, paths, &ip.settings, &mut s, &mut rays).2
+                            }
+                            None => escaped_radiance(scene, ray.dir, None),
+                        };
+                    let mut medium = Rgb::ZERO;
+                    if let Some(m) = &scene.medium {
+                        let dt = ray.step(params.march_step);
+                        let lobe = Lobe::Phase {
+                            hg: m.phase,
+                            travel: ray.dir,
+                        };
+                        for (_, t) in ray.march(params.march_step) {
+                            let p = ray.at(t);
+                            let v = l_s(p, &lobe, m.sigma_s, &mut s, &mut rays);
+                            uncovered += v.is_none() as u64;
+                            medium += m.transmittance(ray.origin, ray.dir, t) * v.unwrap_or(Rgb::ZERO) * dt;
+                        }
+                    }
+                    let total = surface + medium;
+                    let y = luminance(total);
+                    acc = (acc.0 + total, acc.1 + medium, acc.2 + y, acc.3 + y * y);
+                }
+                row.push(acc);
+            }
+            progress.advance(1);
+            Ok((row, rays, uncovered))
+        })
+        .collect();
+    let n = spp as f64;
+    let mut image = Rendered {
+        width: w,
+        height: h,
+        values: Vec::with_capacity(w * h),
+        medium: Vec::with_capacity(w * h),
+        std_error: Vec::with_capacity(w * h),
+        spp,
+        rays: 0,
+        seconds: 0.0,
+    };
+    let mut uncovered = 0;
+    for r in rows {
+        let (row, rays, unc) = r?;
+        image.rays += rays;
+        uncovered += unc;
+        for (total, medium, sy, sy2) in row {
+            image.values.push(total / n);
+            image.medium.push(medium / n);
+            let mean = sy / n;
+            image
+                .std_error
+                .push(((sy2 / n - mean * mean).max(0.0) / (n - 1.0).max(1.0)).sqrt());
+        }
+    }
+    image.seconds = start.elapsed().as_secs_f64();
+    Ok(Reconstruction { image, uncovered })
+}
+
+/// A cached render: its placement, the image and the costs.
+#[derive(Clone, Debug)]
+pub struct CachedRender {
+    pub placement: Placement,
+    pub reconstruction: Reconstruction,
+}
+
+impl CachedRender {
+    /// Placement plus reconstruction.
+    pub fn seconds(&self) -> f64 {
+        self.placement.seconds + self.reconstruction.image.seconds
+    }
+
+    pub fn rays(&self) -> u64 {
+        self.placement.rays + self.reconstruction.image.rays
+    }
+}
+
+/// Place (at `cs.eps`, or at the ε giving `target` records) and reconstruct.
+pub fn render_cached(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cs: &CacheSettings,
+    target: Option<usize>,
+    memo: &mut RecordMemo,
+    progress: &Progress,
+) -> Result<CachedRender, Cancelled> {
+    let placement = match target {
+        Some(n) => place_with_count(scene, params, cs, n, memo, progress)?,
+        None => place(scene, params, cs, memo, progress)?,
+    };
+    let second_order = cs.second_order && cs.method == CacheMethod::Ours;
+    let reconstruction = reconstruct(scene, params, &placement.cache, second_order, progress)?;
+    Ok(CachedRender {
+        placement,
+        reconstruction,
+    })
+}

@@ -1,0 +1,123 @@
+//! Camera rays of a cached 3D render: each camera sample's ray, its first hit, and
+//! the stratified march points where in-scattered radiance is looked up.
+//!
+//! Sample k of pixel (i, j) draws from the stream (seed, j·W + i, k) of the *full*
+//! image, as the path tracer does (`render`): two numbers for the position in the
+//! pixel (the same camera rays as a path-traced render of the same seed), one for
+//! the march offset ξ; surface and direct-light sampling follow. The march points
+//! are t_n = t0 + (n + ξ)·Δ for t_n < t1, where [t0, t1] is the medium's piece of
+//! the ray before its hit: Σ_n T(t_n) L_s(t_n) Δ is an unbiased (stratified)
+//! estimate of ∫ T L_s dt. Placement and reconstruction derive the same points from
+//! the same streams, so every point the render looks up was visited by placement.
+
+use super::camera::Camera;
+use super::mesh::Hit;
+use super::scene::Scene;
+use crate::core::rng::Sampler;
+use glam::{DVec2, DVec3};
+
+/// At most this many march points per camera ray: a step far below the scene's
+/// size is stretched on long rays rather than allowed to hang the render.
+pub const MAX_MARCH_POINTS: usize = 1 << 14;
+
+/// Identifies a query point of an image: (full-image pixel index, camera sample,
+/// march point). Record streams and the memo of light fields are keyed by it.
+pub type QueryKey = (u32, u32, u32);
+
+/// One camera sample's ray.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraRay {
+    pub origin: DVec3,
+    pub dir: DVec3,
+    pub hit: Option<Hit>,
+    /// The medium's piece [t0, t1] of the ray before the hit (or the world's edge).
+    pub medium: Option<(f64, f64)>,
+    /// March offset ξ in [0, 1).
+    pub offset: f64,
+}
+
+impl CameraRay {
+    /// Sample `k` of full-image pixel `pixel` (row-major, `cam.width` wide). Returns
+    /// the ray and its stream, positioned after the draws the ray used.
+    pub fn trace(scene: &Scene, cam: &Camera, pixel: usize, k: u32, seed: u64) -> (CameraRay, Sampler) {
+        let mut s = Sampler::new2(seed, pixel as u64, k as u64);
+        let (i, j) = (pixel % cam.width, pixel / cam.width);
+        let p = DVec2::new(i as f64 + s.next_f64(), j as f64 + s.next_f64());
+        let offset = s.next_f64();
+        let dir = cam.direction(p);
+        let origin = cam.position;
+        let hit = scene.closest_hit(origin, dir, f64::INFINITY, None);
+        let end = hit.map_or_else(|| scene.world_exit(origin, dir), |h| h.t);
+        let medium = scene.medium.as_ref().and_then(|m| m.interval(origin, dir, end));
+        (
+            CameraRay {
+                origin,
+                dir,
+                hit,
+                medium,
+                offset,
+            },
+            s,
+        )
+    }
+
+    /// The march step actually used: `step`, stretched so that the ray has at most
+    /// [`MAX_MARCH_POINTS`] points.
+    pub fn step(&self, step: f64) -> f64 {
+        match self.medium {
+            Some((t0, t1)) => step.max((t1 - t0) / MAX_MARCH_POINTS as f64),
+            None => step,
+        }
+    }
+
+    /// The march points (n, t_n) for a step `step` (> 0).
+    pub fn march(&self, step: f64) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let (t0, t1) = self.medium.unwrap_or((0.0, 0.0));
+        let dt = self.step(step);
+        (0..)
+            .map(move |n| (n, t0 + (n as f64 + self.offset) * dt))
+            .take_while(move |&(n, t)| t < t1 && n < MAX_MARCH_POINTS)
+    }
+
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.origin + self.dir * t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fog_room() -> Scene {
+        Scene::from_json(
+            r#"{ "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov_deg": 40},
+                 "shapes": [{"quad": {"origin": [-5, -5, -1], "u": [10, 0, 0], "v": [0, 10, 0]}, "reflectance": 0.5}],
+                 "lights": [{"sky": {"radiance": 1}}],
+                 "medium": {"sigma_a": 0.1, "sigma_s": 0.2, "g": 0,
+                            "region": {"box": {"min": [-2, -2, -1], "max": [2, 2, 2]}}} }"#,
+            "<test>",
+            std::path::Path::new("."),
+        )
+        .unwrap()
+    }
+
+    /// March points lie in the medium's piece before the hit, one per step, and
+    /// the same (pixel, sample) always gives the same ray.
+    #[test]
+    fn march_points_stratify_the_medium_piece() {
+        let s = fog_room();
+        let cam = super::super::render::camera(&s, 8, 8);
+        let (r, _) = CameraRay::trace(&s, &cam, 27, 3, 9);
+        let (again, _) = CameraRay::trace(&s, &cam, 27, 3, 9);
+        assert_eq!(r.dir, again.dir);
+        assert_eq!(r.offset, again.offset);
+        let (t0, t1) = r.medium.expect("the centre pixels see the fog box");
+        let h = r.hit.expect("the wall behind the fog").t;
+        assert!(t0 > 2.9 && t1 <= h + 1e-12, "{t0} {t1} {h}");
+        let pts: Vec<(usize, f64)> = r.march(0.1).collect();
+        assert_eq!(pts.len(), ((t1 - t0) / 0.1 - r.offset).ceil() as usize);
+        assert!(pts.iter().all(|&(_, t)| t >= t0 && t < t1));
+        // A step far too small is stretched to the cap.
+        assert_eq!(r.march(1e-300).count(), MAX_MARCH_POINTS);
+    }
+}

@@ -1,0 +1,194 @@
+//! A placed 3D radiance cache on disk, so that the tiles of a large render (jobs of
+//! a scheduler, on other machines) reconstruct from the very records a full render
+//! would use, and their merge is the full image bit for bit — as Radiance's
+//! processes share an ambient file.
+//!
+//! JSON: a header naming what the records are valid for (a stable hash of the scene
+//! description, the method, ε, the image's size, samples per pixel, seed and march
+//! step: the query points placement covered) and the records (position, value,
+//! gradient and Hessian per channel, extent axes and radii, rays). Floats are written
+//! in their shortest exact form and read back exactly. Loading checks the header
+//! against the render that wants to use it and every record's validity, and names
+//! the file and the JSON path of whatever is wrong.
+
+use super::cached::{CachedRenderParams, Placement, RadianceCache};
+use super::scene::Scene;
+use crate::core::cache::Record;
+use crate::core::metric::{CacheMethod, Extent};
+use crate::core::rng::fnv1a;
+use crate::core::space::D3;
+use crate::core::taylor::Taylor2;
+use crate::core::taylor_rgb::TaylorRgb;
+use glam::{DMat3, DVec3};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+pub const FORMAT: &str = "volcache-records-3d/1";
+
+/// What the records were placed for: a render may use them only if it asks for the
+/// same query points (so that every one is covered).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ValidFor {
+    /// FNV-1a of the scene description's JSON, hex.
+    pub scene_hash: String,
+    pub width: usize,
+    pub height: usize,
+    /// Window [x0, y0, x1, y1] whose query points placement walked.
+    pub window: [usize; 4],
+    pub spp: u32,
+    pub seed: u64,
+    pub march_step: f64,
+}
+
+impl ValidFor {
+    pub fn of(scene: &Scene, params: &CachedRenderParams) -> Self {
+        let ip = &params.image;
+        ValidFor {
+            scene_hash: scene_hash(scene),
+            width: ip.width,
+            height: ip.height,
+            window: ip.window(),
+            spp: ip.spp,
+            seed: ip.seed,
+            march_step: params.march_step,
+        }
+    }
+
+    /// Why records placed for `self` cannot serve a render of `want`, if they cannot.
+    pub fn mismatch(&self, want: &ValidFor) -> Option<String> {
+        if self.scene_hash != want.scene_hash {
+            return Some("they were placed for another scene (or an edited one)".into());
+        }
+        let [x0, y0, x1, y1] = self.window;
+        let [a0, b0, a1, b1] = want.window;
+        let same_image = (self.width, self.height, self.spp, self.seed) == (want.width, want.height, want.spp, want.seed)
+            && self.march_step == want.march_step;
+        if !same_image {
+            return Some(format!(
+                "they cover {}x{} at {} spp, seed {}, march step {} but the render asks for {}x{} at {} spp, seed {}, march step {}",
+                self.width,
+                self.height,
+                self.spp,
+                self.seed,
+                self.march_step,
+                want.width,
+                want.height,
+                want.spp,
+                want.seed,
+                want.march_step
+            ));
+        }
+        if !(x0 <= a0 && y0 <= b0 && a1 <= x1 && b1 <= y1) {
+            return Some(format!(
+                "they cover the window {:?}, which does not contain the render's {:?}",
+                self.window, want.window
+            ));
+        }
+        None
+    }
+}
+
+/// One record as stored: per channel [value, ∇ (3), H (9, column-major)].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StoredRecord {
+    pub position: [f64; 3],
+    pub value: [[f64; 13]; 3],
+    /// Unit axes (columns of the extent's rotation) and their radii.
+    pub axes: [[f64; 3]; 3],
+    pub radii: [f64; 3],
+    pub rays: u64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordsFile {
+    pub format: String,
+    pub valid_for: ValidFor,
+    pub method: CacheMethod,
+    pub eps: f64,
+    pub query_points: u64,
+    pub placement_rays: u64,
+    pub placement_seconds: f64,
+    pub records: Vec<StoredRecord>,
+}
+
+/// Stable hash of what a scene is (its parsed description, not the file's bytes).
+pub fn scene_hash(scene: &Scene) -> String {
+    let text = serde_json::to_string(&scene.desc).unwrap_or_default();
+    format!("{:016x}", fnv1a(text.as_bytes()))
+}
+
+impl RecordsFile {
+    pub fn from_placement(scene: &Scene, params: &CachedRenderParams, method: CacheMethod, p: &Placement) -> Self {
+        let records = p
+            .cache
+            .records()
+            .iter()
+            .map(|r| StoredRecord {
+                position: r.position.to_array(),
+                value: r.value.channels.map(|c| {
+                    let mut a = [0.0; 13];
+                    a[0] = c.value;
+                    a[1..4].copy_from_slice(&c.grad.to_array());
+                    a[4..].copy_from_slice(&c.hess.to_cols_array());
+                    a
+                }),
+                axes: r.extent.axes.to_cols_array_2d(),
+                radii: r.extent.radii.to_array(),
+                rays: r.cost_rays,
+            })
+            .collect();
+        RecordsFile {
+            format: FORMAT.into(),
+            valid_for: ValidFor::of(scene, params),
+            method,
+            eps: p.eps,
+            query_points: p.query_points,
+            placement_rays: p.rays,
+            placement_seconds: p.seconds,
+            records,
+        }
+    }
+
+    /// Parse and check the records (not yet against a render: see [`ValidFor::mismatch`]).
+    pub fn parse(text: &str, file: &str) -> Result<(RecordsFile, RadianceCache), String> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let f: RecordsFile =
+            serde_path_to_error::deserialize(de).map_err(|e| format!("{file}: at `{}`: {}", e.path(), e.inner()))?;
+        if f.format != FORMAT {
+            return Err(format!("{file}: at `format`: expected \"{FORMAT}\", found {:?}", f.format));
+        }
+        let mut cache = RadianceCache::new();
+        for (i, r) in f.records.iter().enumerate() {
+            let channels = r.value.map(|a| {
+                Taylor2::<D3>::new(
+                    a[0],
+                    DVec3::from_slice(&a[1..4]),
+                    DMat3::from_cols_slice(&a[4..]),
+                )
+            });
+            let record = Record {
+                position: DVec3::from_array(r.position),
+                value: TaylorRgb { channels },
+                extent: Extent::<D3> {
+                    axes: DMat3::from_cols_array_2d(&r.axes),
+                    radii: DVec3::from_array(r.radii),
+                },
+                cost_rays: r.rays,
+            };
+            cache
+                .insert(record)
+                .map_err(|e| format!("{file}: at `records[{i}]`: {e}"))?;
+        }
+        Ok((f, cache))
+    }
+
+    /// Read and check a records file; errors name the file and the JSON path.
+    pub fn load(path: &Path) -> Result<(RecordsFile, RadianceCache), String> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: {e}"))?;
+        Self::parse(&text, &file)
+    }
+}
