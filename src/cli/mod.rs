@@ -11,10 +11,13 @@ mod field;
 mod figure;
 mod figure_compare;
 mod figure_draw;
+mod image3d;
+mod merge3d;
 mod probe;
 mod probe_derivs;
 mod reference;
 mod render3d;
+mod render3d_cache;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -52,6 +55,8 @@ enum Command {
     #[command(subcommand)]
     Figure(figure::FigureCommand),
     Render3d(render3d::Render3dArgs),
+    /// Join the tiles of a 3D render (`render3d --tile i/n`) into the full image.
+    Merge3d(merge3d::Merge3dArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
@@ -69,5 +74,6 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Bench(b) => bench::run(b),
         Command::Figure(f) => figure::run(f),
         Command::Render3d(a) => render3d::run(a),
+        Command::Merge3d(a) => merge3d::run(a),
     }
 }

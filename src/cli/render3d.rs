@@ -1,14 +1,21 @@
-//! `volcache render3d`: render a 3D scene to linear EXR, tone-mapped PNG and a JSON
-//! summary (time, rays, samples/s, ray-casting throughput).
+//! `volcache render3d`: render a 3D scene by volumetric path tracing (`pt`) or from
+//! a radiance cache (`ours`, `jarosz08`), to linear EXR (image and medium part),
+//! tone-mapped PNG and a JSON summary (time, rays, records, errors against a
+//! reference). `--crop` / `--tile i/n` render a window of the full image with the
+//! full image's samples, so tiles from separate jobs merge (`merge3d`) into the
+//! full render; cache methods share their records through `--records-out` /
+//! `--records-in`.
 
-use super::common::{ProgressUi, parse_res, wrote};
+use super::common::{ProgressUi, parse_res};
+use super::image3d::{
+    CacheSummary, Summary3d, mean_luminance, parse_crop, parse_tile, reference_errors, set_window, write_outputs,
+};
+use super::render3d_cache::{Cache3dArgs, run_cached};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use volcache::figure::tonemap;
-use volcache::flatland::field::Field;
-use volcache::output::{write_exr, write_json, write_png};
+use volcache::volume::records_file::scene_hash;
 use volcache::volume::render::{RenderParams, Rendered, ray_cast_rate, render};
 use volcache::volume::scene::Scene;
 
@@ -17,21 +24,32 @@ use volcache::volume::scene::Scene;
 pub enum Method {
     /// Reference volumetric path tracing.
     Pt,
-    /// Second-order occlusion-aware radiance caching (not implemented yet).
+    /// Second-order occlusion-aware radiance caching (Hessian ellipsoids).
     Ours,
-    /// Jarosz et al. 2008 radiance caching (not implemented yet).
+    /// Jarosz et al. 2008 radiance caching (occlusion-unaware gradients, balls).
     Jarosz08,
 }
 
-/// Render a 3D scene (volumetric path tracing) to EXR, PNG and a JSON summary.
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Pt => "pt",
+            Method::Ours => "ours",
+            Method::Jarosz08 => "jarosz08",
+        }
+    }
+}
+
+/// Render a 3D scene by path tracing or from a radiance cache.
 #[derive(Args, Debug)]
-#[command(about = "Render a 3D scene (volumetric path tracing) to EXR, PNG and a JSON summary")]
+#[command(about = "Render a 3D scene (path tracing or radiance caching) to EXR, PNG and a JSON summary")]
 pub struct Render3dArgs {
     /// Scene JSON (see scenes3d/).
     pub scene: PathBuf,
     #[arg(long, value_enum, default_value = "pt")]
     pub method: Method,
-    /// Samples per pixel (with --time-budget: the most; default there: unlimited).
+    /// Samples per pixel (pt default: the scene's; caches: camera samples, default 4;
+    /// with --time-budget: the most, default unlimited).
     #[arg(long)]
     pub spp: Option<u32>,
     /// Resolution WxH (default: the scene's render block).
@@ -40,71 +58,70 @@ pub struct Render3dArgs {
     /// Seed of the per-(pixel, sample) random streams.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Stop adding samples before a pass that would exceed this many seconds.
+    /// pt only: stop adding samples before a pass that would exceed this many seconds.
     #[arg(long)]
     pub time_budget: Option<f64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full image (same samples as
     /// the full render, so crops tile it).
-    #[arg(long, value_parser = parse_crop)]
+    #[arg(long, value_parser = parse_crop, conflicts_with = "tile")]
     pub crop: Option<[usize; 4]>,
+    /// Render tile i of n (0 ≤ i < n): rows [i·H/n, (i+1)·H/n). Outputs are named
+    /// `<scene>_<method>_tile<i>of<n>.*`; `volcache merge3d` joins them.
+    #[arg(long, value_parser = parse_tile)]
+    pub tile: Option<[usize; 2]>,
+    #[command(flatten)]
+    pub cache: Cache3dArgs,
+    /// A reference EXR of the same window (e.g. a long `--method pt` render): RMSE and
+    /// relMSE of the image, and of its medium part when `<reference>_medium.exr` exists.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
     /// Exposure in stops for the PNG.
     #[arg(long, allow_hyphen_values = true)]
     pub exposure: Option<f64>,
     /// Also measure closest-hit throughput on this many random rays (JSON: rays3d).
     #[arg(long)]
     pub bench_rays: Option<u64>,
-    /// Output folder: <scene>_<method>.exr, .png, .json.
+    /// Output folder: <scene>_<method>.exr, _medium.exr, .png, .json.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
     #[arg(long)]
     pub quiet: bool,
 }
 
-fn parse_crop(s: &str) -> Result<[usize; 4], String> {
-    let v: Vec<usize> = s
-        .split(',')
-        .map(|p| p.trim().parse::<usize>().map_err(|e| format!("`{p}` in `{s}`: {e}")))
-        .collect::<Result<_, _>>()?;
-    match v[..] {
-        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
-        [_, _, _, _] => Err(format!("expected x0 < x1 and y0 < y1, got `{s}`")),
-        _ => Err(format!("expected x0,y0,x1,y1, got `{s}`")),
+/// The summary fields every method fills the same way.
+pub fn summary(scene: &Scene, method: Method, params: &RenderParams, img: &Rendered) -> Summary3d {
+    Summary3d {
+        volcache_version: env!("CARGO_PKG_VERSION").into(),
+        scene: scene.source.clone(),
+        scene_hash: scene_hash(scene),
+        description: scene.desc.description.clone(),
+        method: method.name().into(),
+        params: params.clone(),
+        window: params.window(),
+        threads: rayon::current_num_threads(),
+        spp: img.spp,
+        seconds: img.seconds,
+        rays: img.rays,
+        rays_per_second: img.rays as f64 / img.seconds.max(1e-9),
+        relative_std_error: img.relative_std_error(),
+        mean_luminance: mean_luminance(&img.values),
+        exposure: scene.desc.render.exposure,
+        triangles: scene.triangles.len(),
+        rays3d_closest_hit_per_second: None,
+        cache: None,
+        errors: None,
+        exr: String::new(),
+        medium_exr: String::new(),
+        png: String::new(),
     }
-}
-
-#[derive(Serialize)]
-struct Summary<'a> {
-    volcache_version: &'a str,
-    scene: &'a str,
-    description: &'a str,
-    method: Method,
-    params: &'a RenderParams,
-    threads: usize,
-    spp: u32,
-    seconds: f64,
-    rays: u64,
-    samples: u64,
-    samples_per_second: f64,
-    rays_per_second: f64,
-    /// RMS per-pixel standard error over the mean (luminance).
-    relative_std_error: f64,
-    mean_luminance: f64,
-    triangles: usize,
-    /// Closest-hit queries per second on random rays (--bench-rays).
-    rays3d_closest_hit_per_second: Option<f64>,
-    exr: String,
-    png: String,
 }
 
 pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
-    if a.method != Method::Pt {
-        anyhow::bail!(
-            "--method {} is not implemented yet (issue 6): only --method pt renders for now",
-            a.method
-                .to_possible_value()
-                .map_or("?".into(), |v| v.get_name().to_string())
-        );
-    }
+    anyhow::ensure!(
+        a.time_budget.is_none() || a.method == Method::Pt,
+        "--time-budget applies to --method pt; cache methods are compared with path tracing at equal time by \
+         `volcache figure compare3d` and `volcache bench tradeoff3d`"
+    );
     let scene = Scene::load(&a.scene)?;
     let stem = a
         .scene
@@ -123,97 +140,96 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         params.spp = a.spp.unwrap_or(1 << 24);
     } else if let Some(s) = a.spp {
         params.spp = s;
+    } else if a.method != Method::Pt {
+        params.spp = 4;
     }
     anyhow::ensure!(params.spp > 0, "--spp must be at least 1");
     params.seed = a.seed.unwrap_or(params.seed);
-    if let Some(c) = a.crop {
-        anyhow::ensure!(
-            c[2] <= params.width && c[3] <= params.height,
-            "--crop {c:?} exceeds the image ({}x{})",
-            params.width,
-            params.height
-        );
-        params.crop = Some(c);
-    }
+    let tile_suffix = set_window(&mut params, a.crop, a.tile)?;
     let exposure = a.exposure.unwrap_or(scene.desc.render.exposure);
     anyhow::ensure!(exposure.is_finite(), "--exposure must be finite");
 
     let [x0, y0, x1, y1] = params.window();
-    let label = format!("{stem} {}x{} pt", x1 - x0, y1 - y0);
+    let label = format!("{stem} {}x{} {}", x1 - x0, y1 - y0, a.method.name());
     let ui = ProgressUi::new(&label, !a.quiet);
-    let result = render(&scene, &params, &ui.progress);
+    let result: Result<(Option<Rendered>, Option<CacheSummary>), anyhow::Error> = match a.method {
+        Method::Pt => render(&scene, &params, &ui.progress)
+            .map(|img| (Some(img), None))
+            .map_err(anyhow::Error::from),
+        Method::Ours | Method::Jarosz08 => {
+            run_cached(&scene, &params, a.method, &a.cache, &ui.progress).map(|(img, c)| (img, Some(c)))
+        }
+    };
     ui.finish();
-    let Ok(img) = result else {
-        eprintln!("cancelled: no output written (existing files left untouched)");
-        return Ok(ExitCode::from(130));
+    let (img, cache) = match result {
+        Ok(r) => r,
+        Err(e) if e.is::<volcache::progress::Cancelled>() => {
+            eprintln!("cancelled: no output written (existing files left untouched)");
+            return Ok(ExitCode::from(130));
+        }
+        Err(e) => return Err(e),
     };
-    let bench = a.bench_rays.map(|n| ray_cast_rate(&scene, n.max(1), params.seed));
-
-    let base = a.out.join(format!("{stem}_pt"));
-    let (exr, png, json) = (
-        base.with_extension("exr"),
-        base.with_extension("png"),
-        base.with_extension("json"),
-    );
-    wrote(&exr, write_exr(&exr, &as_field(&img)))?;
-    wrote(&png, write_png(&png, &tonemapped(&img, exposure)?))?;
-    let samples = (img.width * img.height) as u64 * img.spp as u64;
-    let secs = img.seconds.max(1e-9);
-    let n = img.values.len().max(1) as f64;
-    let summary = Summary {
-        volcache_version: env!("CARGO_PKG_VERSION"),
-        scene: &scene.source,
-        description: &scene.desc.description,
-        method: a.method,
-        params: &params,
-        threads: rayon::current_num_threads(),
-        spp: img.spp,
-        seconds: img.seconds,
-        rays: img.rays,
-        samples,
-        samples_per_second: samples as f64 / secs,
-        rays_per_second: img.rays as f64 / secs,
-        relative_std_error: img.relative_std_error(),
-        mean_luminance: img
-            .values
-            .iter()
-            .map(|v| volcache::core::color::luminance(*v))
-            .sum::<f64>()
-            / n,
-        triangles: scene.triangles.len(),
-        rays3d_closest_hit_per_second: bench,
-        exr: exr.display().to_string(),
-        png: png.display().to_string(),
+    let Some(img) = img else {
+        if let Some(c) = &cache {
+            eprintln!(
+                "placed {} records (ε = {:.3e}) in {:.2} s; no image rendered (--place-only)",
+                c.records, c.eps, c.placement_seconds
+            );
+        }
+        return Ok(ExitCode::SUCCESS);
     };
-    eprintln!(
-        "{} spp in {:.2} s: {} rays ({:.2} M rays/s), {:.0} samples/s, relative std error {:.2}%",
-        img.spp,
-        img.seconds,
-        img.rays,
-        summary.rays_per_second / 1e6,
-        summary.samples_per_second,
-        100.0 * summary.relative_std_error
-    );
-    if let Some(b) = bench {
-        eprintln!("ray casting: {:.2} M closest-hit rays/s", b / 1e6);
+    let mut summary = summary(&scene, a.method, &params, &img);
+    summary.cache = cache;
+    summary.exposure = exposure;
+    summary.rays3d_closest_hit_per_second = a.bench_rays.map(|n| ray_cast_rate(&scene, n.max(1), params.seed));
+    if let Some(r) = &a.reference {
+        summary.errors = Some(reference_errors(&img, r)?);
     }
-    wrote(&json, write_json(&json, &summary))?;
+    report(&summary, &img);
+    let base = a
+        .out
+        .join(format!("{stem}_{}{}", a.method.name(), tile_suffix.unwrap_or_default()));
+    write_outputs(&base, &img, exposure, &mut summary)?;
     Ok(ExitCode::SUCCESS)
 }
 
-/// The image as a field (the EXR writer's type); its world rectangle is unused.
-fn as_field(img: &Rendered) -> Field {
-    let mut f = Field::new(img.width, img.height, glam::DVec2::ZERO, glam::DVec2::ONE);
-    f.values.clone_from(&img.values);
-    f
-}
-
-fn tonemapped(img: &Rendered, exposure: f64) -> anyhow::Result<tiny_skia::Pixmap> {
-    let mut pm = tiny_skia::Pixmap::new(img.width as u32, img.height as u32)
-        .ok_or_else(|| anyhow::anyhow!("cannot make a {}x{} image", img.width, img.height))?;
-    for (px, v) in pm.pixels_mut().iter_mut().zip(&img.values) {
-        let [r, g, b] = tonemap(*v, exposure);
-        *px = tiny_skia::PremultipliedColorU8::from_rgba(r, g, b, 255).expect("opaque");
+fn report(s: &Summary3d, img: &Rendered) {
+    eprintln!(
+        "{} spp in {:.2} s: {} rays ({:.2} M rays/s), relative std error {:.2}%",
+        img.spp,
+        s.seconds,
+        s.rays,
+        s.rays_per_second / 1e6,
+        100.0 * s.relative_std_error
+    );
+    if let Some(c) = &s.cache {
+        eprintln!(
+            "cache: {} records (ε = {:.3e}) over {} query points; placement {:.2} s ({:.1} records/s), \
+             reconstruction {:.2} s{}",
+            c.records,
+            c.eps,
+            c.query_points,
+            c.placement_seconds,
+            c.records_per_second,
+            c.reconstruction_seconds,
+            if c.uncovered > 0 {
+                format!("; {} query points uncovered", c.uncovered)
+            } else {
+                String::new()
+            }
+        );
     }
-    Ok(pm)
+    if let Some(b) = s.rays3d_closest_hit_per_second {
+        eprintln!("ray casting: {:.2} M closest-hit rays/s", b / 1e6);
+    }
+    if let Some(e) = &s.errors {
+        eprintln!(
+            "against {}: RMSE {:.4e}, relMSE {:.4e}{}",
+            e.reference,
+            e.total.rmse,
+            e.total.relmse,
+            e.medium
+                .map_or(String::new(), |m| format!("; medium part RMSE {:.4e}", m.rmse))
+        );
+    }
 }

@@ -27,16 +27,15 @@
 
 use super::camera_march::{CameraRay, QueryKey};
 use super::derivatives::{AwareSettings, aware, unaware};
-use super::lights::{Lobe, direct_part, escaped_radiance};
 use super::probe::{Outgoing, ProbeSettings, capture_towards};
 use super::proxy::{self, Element};
-use super::render::{RenderParams, Rendered, camera};
+pub use super::reconstruct::{Reconstruction, march_reference, reconstruct};
+use super::render::{RenderParams, camera};
 use super::scene::Scene;
-use super::transport::{radiance_leaving_hit, sample_lobe};
 use crate::core::cache::{Cache, Record, placement_order};
 use crate::core::color::{Rgb, luminance};
 use crate::core::metric::{CacheMethod, MetricParams, hessian_radiance_floor};
-use crate::core::rng::{Sampler, mix64};
+use crate::core::rng::mix64;
 use crate::core::space::D3;
 use crate::core::taylor_rgb::TaylorRgb;
 use crate::progress::{Cancelled, Progress};
@@ -176,7 +175,7 @@ impl Placement {
 
 /// A record at x may be used at y: it sees y (a record never extrapolates across a
 /// surface, where radiance jumps).
-fn sees(scene: &Scene, x: DVec3, y: DVec3, rays: &mut u64) -> bool {
+pub(crate) fn sees(scene: &Scene, x: DVec3, y: DVec3, rays: &mut u64) -> bool {
     let d = y - x;
     let len = d.length();
     if len == 0.0 {
@@ -262,8 +261,9 @@ pub fn place(
     let (mut query_points, mut rays, mut records_seconds, mut capture_wall) = (0u64, 0u64, 0.0, 0.0);
     for batch in order.chunks(BATCH_PIXELS) {
         progress.check()?;
-        // Points not covered by the cache as it is now, in order, with the checks' rays.
-        let pending: Vec<(Vec<(QueryKey, DVec3)>, u64, u64)> = batch
+        // Per pixel: its uncovered points in order, its query points, the checks' rays.
+        type Pending = (Vec<(QueryKey, DVec3)>, u64, u64);
+        let pending: Vec<Pending> = batch
             .par_iter()
             .map(|&pixel| {
                 let (mut out, mut n, mut r) = (Vec::new(), 0u64, 0u64);
@@ -336,151 +336,6 @@ pub fn place_with_count(
         place(scene, params, &c, memo, progress).map(|p| (p.cache.len(), p))
     })?;
     Ok(placement)
-}
-
-/// A reconstructed image and its cost.
-#[derive(Clone, Debug)]
-pub struct Reconstruction {
-    pub image: Rendered,
-    /// Query points no visible record covered (zero after a placement of the same
-    /// window; a tile rendered with another window's records may have some).
-    pub uncovered: u64,
-}
-
-/// Render the window from the cache: per camera sample, T L_o at the first surface
-/// (path traced) plus Σ_n T(t_n) Δ [σ_s·direct + cached L_s] over its march points.
-pub fn reconstruct(
-    scene: &Scene,
-    params: &CachedRenderParams,
-    cache: &RadianceCache,
-    second_order: bool,
-    progress: &Progress,
-) -> Result<Reconstruction, Cancelled> {
-    // Each row's clone of the closure has its own scratch buffer.
-    let mut scratch: Vec<(usize, f64)> = Vec::new();
-    march_image(scene, params, progress, move |p, lobe, sigma_s, s, rays| {
-        let direct = direct_part(scene, p, lobe, s, rays) * sigma_s;
-        let cached = cache.interpolate_where(p, second_order, &mut scratch, |x| sees(scene, x, p, rays));
-        cached.map(|c| direct + c.max(Rgb::ZERO))
-    })
-}
-
-/// The same image with L_s path traced at every march point (`paths` samples, all
-/// parts) instead of cached: the same camera rays, march points and surface samples
-/// as [`reconstruct`] with the same parameters, so the difference between the two
-/// is the cache's error alone (common random numbers), up to this estimate's noise.
-pub fn march_reference(
-    scene: &Scene,
-    params: &CachedRenderParams,
-    paths: u32,
-    progress: &Progress,
-) -> Result<Reconstruction, Cancelled> {
-    let paths = paths.max(1);
-    march_image(scene, params, progress, |p, lobe, sigma_s, s, rays| {
-        let mut sum = Rgb::ZERO;
-        for _ in 0..paths {
-            sum += sample_lobe(scene, p, lobe, None, &params.image.settings, s, rays);
-        }
-        Some(sum * sigma_s / paths as f64)
-    })
-}
-
-/// The camera-march image with L_s(p) towards the camera from `l_s(p, phase lobe,
-/// σ_s, stream, rays)` (None: not covered, counted and taken as zero).
-fn march_image<F>(
-    scene: &Scene,
-    params: &CachedRenderParams,
-    progress: &Progress,
-    l_s: F,
-) -> Result<Reconstruction, Cancelled>
-where
-    F: FnMut(DVec3, &Lobe, Rgb, &mut Sampler, &mut u64) -> Option<Rgb> + Clone + Send + Sync,
-{
-    let start = Instant::now();
-    let ip = &params.image;
-    let cam = camera(scene, ip.width, ip.height);
-    let [x0, y0, x1, y1] = ip.window();
-    let (w, h) = (x1 - x0, y1 - y0);
-    let spp = ip.spp.max(1);
-    progress.start(h as u64);
-    type Pixel = (Rgb, Rgb, f64, f64); // Σ total, Σ medium part, Σ lum, Σ lum²
-    let rows: Vec<Result<(Vec<Pixel>, u64, u64), Cancelled>> = (y0..y1)
-        .into_par_iter()
-        .map(|j| {
-            let mut l_s = l_s.clone();
-            let (mut rays, mut uncovered) = (0u64, 0u64);
-            let mut row = Vec::with_capacity(w);
-            for i in x0..x1 {
-                progress.check()?;
-                let pixel = j * ip.width + i;
-                let mut acc: Pixel = (Rgb::ZERO, Rgb::ZERO, 0.0, 0.0);
-                for k in 0..spp {
-                    let (ray, mut s) = CameraRay::trace(scene, &cam, pixel, k, ip.seed);
-                    rays += 1;
-                    let end = ray.hit.map_or_else(|| scene.world_exit(ray.origin, ray.dir), |h| h.t);
-                    let t_end = scene
-                        .medium
-                        .as_ref()
-                        .map_or(Rgb::ONE, |m| m.transmittance(ray.origin, ray.dir, end));
-                    let surface = t_end
-                        * match &ray.hit {
-                            Some(hit) => {
-                                let paths = params.surface_paths;
-                                radiance_leaving_hit(scene, hit, ray.dir, paths, &ip.settings, &mut s, &mut rays).2
-                            }
-                            None => escaped_radiance(scene, ray.dir, None),
-                        };
-                    let mut medium = Rgb::ZERO;
-                    if let Some(m) = &scene.medium {
-                        let dt = ray.step(params.march_step);
-                        let lobe = Lobe::Phase {
-                            hg: m.phase,
-                            travel: ray.dir,
-                        };
-                        for (_, t) in ray.march(params.march_step) {
-                            let p = ray.at(t);
-                            let v = l_s(p, &lobe, m.sigma_s, &mut s, &mut rays);
-                            uncovered += v.is_none() as u64;
-                            medium += m.transmittance(ray.origin, ray.dir, t) * v.unwrap_or(Rgb::ZERO) * dt;
-                        }
-                    }
-                    let total = surface + medium;
-                    let y = luminance(total);
-                    acc = (acc.0 + total, acc.1 + medium, acc.2 + y, acc.3 + y * y);
-                }
-                row.push(acc);
-            }
-            progress.advance(1);
-            Ok((row, rays, uncovered))
-        })
-        .collect();
-    let n = spp as f64;
-    let mut image = Rendered {
-        width: w,
-        height: h,
-        values: Vec::with_capacity(w * h),
-        medium: Vec::with_capacity(w * h),
-        std_error: Vec::with_capacity(w * h),
-        spp,
-        rays: 0,
-        seconds: 0.0,
-    };
-    let mut uncovered = 0;
-    for r in rows {
-        let (row, rays, unc) = r?;
-        image.rays += rays;
-        uncovered += unc;
-        for (total, medium, sy, sy2) in row {
-            image.values.push(total / n);
-            image.medium.push(medium / n);
-            let mean = sy / n;
-            image
-                .std_error
-                .push(((sy2 / n - mean * mean).max(0.0) / (n - 1.0).max(1.0)).sqrt());
-        }
-    }
-    image.seconds = start.elapsed().as_secs_f64();
-    Ok(Reconstruction { image, uncovered })
 }
 
 /// A cached render: its placement, the image and the costs.

@@ -9,14 +9,15 @@
 
 pub mod bvh;
 pub mod cached;
-pub mod camera_march;
 pub mod camera;
+pub mod camera_march;
 pub mod derivatives;
 pub mod lights;
 pub mod medium;
 pub mod mesh;
 pub mod probe;
 pub mod proxy;
+pub mod reconstruct;
 pub mod records_file;
 pub mod render;
 pub mod scene;

@@ -62,7 +62,8 @@ impl ValidFor {
         }
         let [x0, y0, x1, y1] = self.window;
         let [a0, b0, a1, b1] = want.window;
-        let same_image = (self.width, self.height, self.spp, self.seed) == (want.width, want.height, want.spp, want.seed)
+        let same_image = (self.width, self.height, self.spp, self.seed)
+            == (want.width, want.height, want.spp, want.seed)
             && self.march_step == want.march_step;
         if !same_image {
             return Some(format!(
@@ -158,17 +159,16 @@ impl RecordsFile {
         let f: RecordsFile =
             serde_path_to_error::deserialize(de).map_err(|e| format!("{file}: at `{}`: {}", e.path(), e.inner()))?;
         if f.format != FORMAT {
-            return Err(format!("{file}: at `format`: expected \"{FORMAT}\", found {:?}", f.format));
+            return Err(format!(
+                "{file}: at `format`: expected \"{FORMAT}\", found {:?}",
+                f.format
+            ));
         }
         let mut cache = RadianceCache::new();
         for (i, r) in f.records.iter().enumerate() {
-            let channels = r.value.map(|a| {
-                Taylor2::<D3>::new(
-                    a[0],
-                    DVec3::from_slice(&a[1..4]),
-                    DMat3::from_cols_slice(&a[4..]),
-                )
-            });
+            let channels = r
+                .value
+                .map(|a| Taylor2::<D3>::new(a[0], DVec3::from_slice(&a[1..4]), DMat3::from_cols_slice(&a[4..])));
             let record = Record {
                 position: DVec3::from_array(r.position),
                 value: TaylorRgb { channels },

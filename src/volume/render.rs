@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
 
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct RenderParams {
     /// Full image size.
     pub width: usize,

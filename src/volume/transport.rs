@@ -19,7 +19,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 /// Path-tracing settings.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Settings {
     /// Maximum number of path vertices (scattering or reflection) after the start.
     pub max_depth: u32,

@@ -1,0 +1,235 @@
+//! What every 3D render writes and how it is read back: linear EXR of the image and
+//! of its medium part, a tone-mapped PNG, and a JSON summary ([`Summary3d`]) that
+//! `merge3d` and the comparison figures read; errors against a reference EXR; the
+//! `--crop` / `--tile` windows.
+
+use super::common::wrote;
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use volcache::core::color::{Rgb, luminance};
+use volcache::core::stats::ImageErrors;
+use volcache::figure::tonemap;
+use volcache::flatland::field::Field;
+use volcache::output::{read_exr, write_exr, write_json, write_png};
+use volcache::volume::cached::CacheSettings;
+use volcache::volume::render::{RenderParams, Rendered};
+
+/// What a cache method placed and what it cost (absent for path tracing).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CacheSummary {
+    pub settings: serde_json::Value,
+    pub eps: f64,
+    pub records: usize,
+    pub target_records: Option<usize>,
+    pub query_points: u64,
+    pub march_step: f64,
+    pub surface_paths: u32,
+    pub placement_seconds: f64,
+    pub placement_rays: u64,
+    pub records_per_second: f64,
+    pub reconstruction_seconds: f64,
+    pub reconstruction_rays: u64,
+    /// Query points no visible record covered (zero unless records came from a
+    /// window that does not contain this render's).
+    pub uncovered: u64,
+    /// The records file read (`--records-in`) or written (`--records-out`).
+    pub records_in: Option<String>,
+    pub records_out: Option<String>,
+}
+
+impl CacheSummary {
+    pub fn settings_json(cs: &CacheSettings) -> serde_json::Value {
+        serde_json::to_value(cs).unwrap_or_default()
+    }
+}
+
+/// Errors of the image (and of its medium part, when the reference has one).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ReferenceErrors {
+    pub reference: String,
+    pub total: ImageErrors,
+    pub medium: Option<ImageErrors>,
+}
+
+/// The JSON summary of one render (a whole image, a crop or a tile).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Summary3d {
+    pub volcache_version: String,
+    pub scene: String,
+    pub scene_hash: String,
+    pub description: String,
+    /// pt, ours or jarosz08.
+    pub method: String,
+    pub params: RenderParams,
+    /// Window [x0, y0, x1, y1] of the full image this render covers.
+    pub window: [usize; 4],
+    pub threads: usize,
+    pub spp: u32,
+    pub seconds: f64,
+    pub rays: u64,
+    pub rays_per_second: f64,
+    /// RMS per-pixel standard error over the mean (luminance).
+    pub relative_std_error: f64,
+    pub mean_luminance: f64,
+    /// Exposure of the PNG, in stops.
+    pub exposure: f64,
+    pub triangles: usize,
+    /// Closest-hit queries per second on random rays (--bench-rays).
+    pub rays3d_closest_hit_per_second: Option<f64>,
+    pub cache: Option<CacheSummary>,
+    pub errors: Option<ReferenceErrors>,
+    /// Files, relative to the summary's folder.
+    pub exr: String,
+    pub medium_exr: String,
+    pub png: String,
+}
+
+/// Parse `i/n` (0 ≤ i < n).
+pub fn parse_tile(s: &str) -> Result<[usize; 2], String> {
+    let (i, n) = s.split_once('/').ok_or_else(|| format!("expected i/n, got `{s}`"))?;
+    let p = |v: &str| v.trim().parse::<usize>().map_err(|e| format!("`{v}` in `{s}`: {e}"));
+    let (i, n) = (p(i)?, p(n)?);
+    if n == 0 || i >= n {
+        return Err(format!("expected 0 <= i < n, got `{s}`"));
+    }
+    Ok([i, n])
+}
+
+/// Parse `x0,y0,x1,y1` with x0 < x1, y0 < y1.
+pub fn parse_crop(s: &str) -> Result<[usize; 4], String> {
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|p| p.trim().parse::<usize>().map_err(|e| format!("`{p}` in `{s}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
+        [_, _, _, _] => Err(format!("expected x0 < x1 and y0 < y1, got `{s}`")),
+        _ => Err(format!("expected x0,y0,x1,y1, got `{s}`")),
+    }
+}
+
+/// Tile i of n: a band of whole rows, [floor(i·H/n), floor((i+1)·H/n)). Bands of
+/// rows keep each tile's work balanced and tile the image exactly.
+pub fn tile_window([i, n]: [usize; 2], width: usize, height: usize) -> anyhow::Result<[usize; 4]> {
+    anyhow::ensure!(
+        n <= height,
+        "--tile {i}/{n}: the image has only {height} rows, so at most {height} tiles"
+    );
+    Ok([0, i * height / n, width, (i + 1) * height / n])
+}
+
+/// The window of `params` from `--crop` or `--tile`, checked against the image.
+pub fn set_window(
+    params: &mut RenderParams,
+    crop: Option<[usize; 4]>,
+    tile: Option<[usize; 2]>,
+) -> anyhow::Result<Option<String>> {
+    if let Some(c) = crop {
+        anyhow::ensure!(
+            c[2] <= params.width && c[3] <= params.height,
+            "--crop {c:?} exceeds the image ({}x{})",
+            params.width,
+            params.height
+        );
+        params.crop = Some(c);
+    }
+    Ok(match tile {
+        Some(t) => {
+            params.crop = Some(tile_window(t, params.width, params.height)?);
+            Some(format!("_tile{}of{}", t[0], t[1]))
+        }
+        None => None,
+    })
+}
+
+/// The image as a field (the EXR writer's type); its world rectangle is unused.
+pub fn as_field(width: usize, height: usize, values: &[Rgb]) -> Field {
+    let mut f = Field::new(width, height, glam::DVec2::ZERO, glam::DVec2::ONE);
+    f.values.copy_from_slice(values);
+    f
+}
+
+pub fn tonemapped(width: usize, height: usize, values: &[Rgb], exposure: f64) -> anyhow::Result<tiny_skia::Pixmap> {
+    let mut pm = tiny_skia::Pixmap::new(width as u32, height as u32)
+        .ok_or_else(|| anyhow::anyhow!("cannot make a {width}x{height} image"))?;
+    for (px, v) in pm.pixels_mut().iter_mut().zip(values) {
+        let [r, g, b] = tonemap(*v, exposure);
+        *px = tiny_skia::PremultipliedColorU8::from_rgba(r, g, b, 255).expect("opaque");
+    }
+    Ok(pm)
+}
+
+/// Read an EXR as RGB values, checking its size.
+pub fn read_image(path: &Path, width: usize, height: usize) -> anyhow::Result<Vec<Rgb>> {
+    let (w, h, px) = read_exr(path)?;
+    anyhow::ensure!(
+        (w, h) == (width, height),
+        "{}: the image is {w}x{h}, expected {width}x{height}",
+        path.display()
+    );
+    Ok(px
+        .iter()
+        .map(|p| Rgb::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .collect())
+}
+
+/// Luminance errors of `values` against `reference`.
+pub fn errors(values: &[Rgb], reference: &[Rgb]) -> ImageErrors {
+    let pairs: Vec<(f64, f64)> = values
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| (luminance(*a), luminance(*b)))
+        .collect();
+    ImageErrors::of_luminance_pairs(&pairs)
+}
+
+/// The medium-part EXR beside an image EXR: `x.exr` → `x_medium.exr`.
+pub fn medium_path(exr: &Path) -> PathBuf {
+    let stem = exr
+        .file_stem()
+        .map_or("image".into(), |s| s.to_string_lossy().into_owned());
+    exr.with_file_name(format!("{stem}_medium.exr"))
+}
+
+/// Errors of `img` against the reference EXR (and its `_medium.exr`, if present).
+pub fn reference_errors(img: &Rendered, reference: &Path) -> anyhow::Result<ReferenceErrors> {
+    let total = read_image(reference, img.width, img.height).context("--reference")?;
+    let med_path = medium_path(reference);
+    let medium = if med_path.exists() {
+        Some(errors(&img.medium, &read_image(&med_path, img.width, img.height)?))
+    } else {
+        None
+    };
+    Ok(ReferenceErrors {
+        reference: reference.display().to_string(),
+        total: errors(&img.values, &total),
+        medium,
+    })
+}
+
+/// Write `<base>.exr`, `<base>_medium.exr`, `<base>.png` and `<base>.json`
+/// (the summary's file names are filled in here).
+pub fn write_outputs(base: &Path, img: &Rendered, exposure: f64, summary: &mut Summary3d) -> anyhow::Result<()> {
+    let exr = base.with_extension("exr");
+    let med = medium_path(&exr);
+    let png = base.with_extension("png");
+    let json = base.with_extension("json");
+    let name = |p: &Path| {
+        p.file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned())
+    };
+    (summary.exr, summary.medium_exr, summary.png) = (name(&exr), name(&med), name(&png));
+    wrote(&exr, write_exr(&exr, &as_field(img.width, img.height, &img.values)))?;
+    wrote(&med, write_exr(&med, &as_field(img.width, img.height, &img.medium)))?;
+    wrote(
+        &png,
+        write_png(&png, &tonemapped(img.width, img.height, &img.values, exposure)?),
+    )?;
+    wrote(&json, write_json(&json, summary))
+}
+
+/// Mean luminance of an image.
+pub fn mean_luminance(values: &[Rgb]) -> f64 {
+    values.iter().map(|v| luminance(*v)).sum::<f64>() / values.len().max(1) as f64
+}

@@ -1,0 +1,186 @@
+//! `volcache render3d --method ours|jarosz08`: placement (at ε, at a record count,
+//! or read from a records file) and reconstruction of a 3D radiance cache.
+
+use super::common::wrote;
+use super::image3d::CacheSummary;
+use super::render3d::Method;
+use clap::Args;
+use std::path::PathBuf;
+use volcache::core::metric::CacheMethod;
+use volcache::output::write_json;
+use volcache::progress::Progress;
+use volcache::volume::cached::{
+    CacheSettings, CachedRenderParams, Placement, RecordMemo, place, place_with_count, reconstruct,
+};
+use volcache::volume::records_file::{RecordsFile, ValidFor};
+use volcache::volume::render::{RenderParams, Rendered};
+use volcache::volume::scene::Scene;
+
+/// Radiance-cache parameters of `render3d`, `figure compare3d` and `bench tradeoff3d`.
+#[derive(Args, Debug, Clone)]
+pub struct Cache3dArgs {
+    /// Error threshold ε (ours: a volume, scene units³; jarosz08: a fraction).
+    /// Default: a scene-relative start.
+    #[arg(long)]
+    pub eps: Option<f64>,
+    /// Equal-count mode: search ε until the method places this many records (±1%).
+    #[arg(long, conflicts_with = "eps")]
+    pub caches: Option<usize>,
+    /// Directions per cache point, stratified over the sphere (the paper: 16k).
+    #[arg(long, default_value_t = 16384)]
+    pub rays: usize,
+    /// Ray-marched medium samples per direction.
+    #[arg(long, default_value_t = 24)]
+    pub steps: usize,
+    /// Recursive paths per probe hit and per medium sample.
+    #[arg(long, default_value_t = 1)]
+    pub paths: u32,
+    /// Distance between march points along camera rays (default: scene size / 128).
+    #[arg(long)]
+    pub march_step: Option<f64>,
+    /// Reflected-light samples per camera sample at the first surface.
+    #[arg(long, default_value_t = 4)]
+    pub surface_paths: u32,
+    /// Second-order interpolation (ours).
+    #[arg(long)]
+    pub second_order: bool,
+    /// Seed of the records' light fields.
+    #[arg(long, default_value_t = 1)]
+    pub cache_seed: u64,
+    /// Reconstruct from these records (from `--records-out` for this image) instead
+    /// of placing.
+    #[arg(long, conflicts_with_all = ["eps", "caches", "records_out"])]
+    pub records_in: Option<PathBuf>,
+    /// Write the placed records here (JSON), for tiles rendered in other jobs.
+    #[arg(long)]
+    pub records_out: Option<PathBuf>,
+    /// With --records-out: place and write the records, render no image.
+    #[arg(long, requires = "records_out")]
+    pub place_only: bool,
+}
+
+impl Cache3dArgs {
+    /// Cache and march settings for `method` on `scene`, checked.
+    pub fn settings(
+        &self,
+        scene: &Scene,
+        image: &RenderParams,
+        method: CacheMethod,
+    ) -> anyhow::Result<(CacheSettings, CachedRenderParams)> {
+        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
+        anyhow::ensure!(
+            (4..=1 << 20).contains(&self.rays),
+            "--rays must be between 4 and 1048576"
+        );
+        anyhow::ensure!((1..=4096).contains(&self.steps), "--steps must be between 1 and 4096");
+        anyhow::ensure!((1..=1024).contains(&self.paths), "--paths must be between 1 and 1024");
+        anyhow::ensure!(
+            (1..=1024).contains(&self.surface_paths),
+            "--surface-paths must be between 1 and 1024"
+        );
+        let mut cp = CachedRenderParams::from_scene(scene);
+        cp.image = image.clone();
+        cp.surface_paths = self.surface_paths;
+        if let Some(d) = self.march_step {
+            anyhow::ensure!(finite_pos(d), "--march-step must be a positive distance");
+            cp.march_step = d;
+        }
+        let eps = self.eps.unwrap_or_else(|| CacheSettings::default_eps(method, scene));
+        anyhow::ensure!(eps.is_finite() && eps >= 0.0, "--eps must be finite and >= 0");
+        if let Some(n) = self.caches {
+            anyhow::ensure!(n > 0, "--caches must be at least 1");
+        }
+        let mut cs = CacheSettings::new(method, eps);
+        cs.probe.rays = self.rays;
+        cs.probe.steps = self.steps;
+        cs.probe.paths = self.paths;
+        cs.second_order = self.second_order;
+        cs.seed = self.cache_seed;
+        Ok((cs, cp))
+    }
+}
+
+pub fn cache_method(m: Method) -> CacheMethod {
+    match m {
+        Method::Ours => CacheMethod::Ours,
+        _ => CacheMethod::Jarosz08,
+    }
+}
+
+/// Place (or load) and reconstruct. Returns no image with `--place-only`.
+pub fn run_cached(
+    scene: &Scene,
+    image: &RenderParams,
+    method: Method,
+    a: &Cache3dArgs,
+    progress: &Progress,
+) -> anyhow::Result<(Option<Rendered>, CacheSummary)> {
+    let method = cache_method(method);
+    let (cs, cp) = a.settings(scene, image, method)?;
+    let placement = match &a.records_in {
+        Some(path) => {
+            let (file, cache) = RecordsFile::load(path).map_err(|e| anyhow::anyhow!("--records-in {e}"))?;
+            anyhow::ensure!(
+                file.method == method,
+                "--records-in {}: the records were placed by {:?}, not {:?}",
+                path.display(),
+                file.method,
+                method
+            );
+            if let Some(why) = file.valid_for.mismatch(&ValidFor::of(scene, &cp)) {
+                anyhow::bail!("--records-in {}: {why}", path.display());
+            }
+            Placement {
+                cache,
+                eps: file.eps,
+                query_points: file.query_points,
+                rays: file.placement_rays,
+                seconds: file.placement_seconds,
+            }
+        }
+        None => {
+            let mut memo = RecordMemo::new();
+            match a.caches {
+                Some(n) => place_with_count(scene, &cp, &cs, n, &mut memo, progress)?,
+                None => place(scene, &cp, &cs, &mut memo, progress)?,
+            }
+        }
+    };
+    if let Some(path) = &a.records_out {
+        let file = RecordsFile::from_placement(scene, &cp, method, &placement);
+        wrote(path, write_json(path, &file))?;
+    }
+    let mut summary = CacheSummary {
+        settings: CacheSummary::settings_json(&cs),
+        eps: placement.eps,
+        records: placement.cache.len(),
+        target_records: a.caches,
+        query_points: placement.query_points,
+        march_step: cp.march_step,
+        surface_paths: cp.surface_paths,
+        placement_seconds: placement.seconds,
+        placement_rays: placement.rays,
+        records_per_second: placement.cache.len() as f64 / placement.seconds.max(1e-9),
+        reconstruction_seconds: 0.0,
+        reconstruction_rays: 0,
+        uncovered: 0,
+        records_in: a.records_in.as_ref().map(|p| p.display().to_string()),
+        records_out: a.records_out.as_ref().map(|p| p.display().to_string()),
+    };
+    if a.place_only {
+        return Ok((None, summary));
+    }
+    let second_order = cs.second_order && method == CacheMethod::Ours;
+    let r = reconstruct(scene, &cp, &placement.cache, second_order, progress)?;
+    summary.reconstruction_seconds = r.image.seconds;
+    summary.reconstruction_rays = r.image.rays;
+    summary.uncovered = r.uncovered;
+    let mut img = r.image;
+    // The image's cost is the whole method's: placement (when it was done here, not
+    // read from a file shared by tiles) plus reconstruction.
+    if a.records_in.is_none() {
+        img.seconds += placement.seconds;
+        img.rays += placement.rays;
+    }
+    Ok((Some(img), summary))
+}
