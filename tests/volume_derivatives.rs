@@ -10,8 +10,8 @@ use volcache::core::space::D3;
 use volcache::core::taylor::Taylor2;
 use volcache::core::triangle::triangle_form_factor;
 use volcache::progress::Progress;
-use volcache::volume::derivatives::{AwareSettings, aware, reference_gradient, unaware};
-use volcache::volume::probe::{LightField, ProbeSettings, capture};
+use volcache::volume::derivatives::{AwareSettings, aware, reference_gradient, reference_gradient_towards, unaware};
+use volcache::volume::probe::{LightField, Outgoing, ProbeSettings, capture, capture_towards};
 use volcache::volume::proxy::{RadianceRule, build};
 use volcache::volume::scene::Scene;
 use volcache::volume::transport::Settings;
@@ -151,6 +151,66 @@ fn anisotropic_single_scattering_against_finite_differences() {
             100.0 * eg
         );
         assert!(ev < 0.10 && eg < 0.10, "value err {ev}, gradient err {eg}");
+    }
+}
+
+/// L_s towards a camera close by (g = 0.5): ω_o turns as x moves, and the aware
+/// derivatives with `Outgoing::TowardsPoint` follow the path tracer's central
+/// differences of what the camera sees, where the same light field differentiated
+/// with ω_o held fixed does not.
+#[test]
+fn towards_a_camera_the_turning_of_omega_o_is_differentiated() {
+    let s = scene(&format!(
+        r#"{{ "camera": {{"position": [0, 0, 5], "look_at": [0, 0, 0], "fov_deg": 40}},
+            "shapes": [{{"quad": {{"origin": [-1, 1, -1], "u": [2, 0, 0], "v": [0, 0, 2]}},
+                "reflectance": 0, "emission": {L_E}, "two_sided": false}}],
+            "medium": {{"sigma_a": 0, "sigma_s": {SIGMA_S}, "g": 0.5}} }}"#
+    ));
+    let ps = ProbeSettings {
+        rays: 16384,
+        steps: 4,
+        ..Default::default()
+    };
+    for (x, eye) in [
+        (DVec3::new(0.2, 0.0, 0.1), DVec3::new(0.2, -0.9, 0.5)),
+        (DVec3::new(0.9, -0.3, 0.4), DVec3::new(0.3, -1.0, 0.0)),
+    ] {
+        let lf = capture_towards(&s, x, Outgoing::TowardsPoint(eye), &ps, 1, 0, &Progress::new()).unwrap();
+        let elements = build(&lf, RadianceRule::Farther);
+        let turning = aware(&lf, &elements, &AwareSettings::default()).total().luminance();
+        let mut fixed_lf = lf.clone();
+        fixed_lf.eye = None;
+        let fixed = aware(&fixed_lf, &elements, &AwareSettings::default())
+            .total()
+            .luminance();
+        let jarosz = unaware(&lf).total().luminance();
+        let fd = reference_gradient_towards(
+            &s,
+            x,
+            Outgoing::TowardsPoint(eye),
+            0.01,
+            100_000,
+            &Settings::default(),
+            5,
+        )
+        .luminance();
+        let err = |g: DVec3| (g - fd.grad).length() / fd.grad.length();
+        eprintln!(
+            "camera at {eye}, x = {x}: L_s {:.4e} (FD {:.4e}); ∇ err: towards the camera {:.1}%, ω_o fixed {:.1}%, \
+             unaware {:.1}%",
+            turning.value,
+            fd.value,
+            100.0 * err(turning.grad),
+            100.0 * err(fixed.grad),
+            100.0 * err(jarosz.grad)
+        );
+        assert_eq!(turning.value, fixed.value);
+        assert!(
+            err(turning.grad) < 0.1,
+            "gradient towards the camera off by {}",
+            err(turning.grad)
+        );
+        assert!(err(fixed.grad) > 2.0 * err(turning.grad));
     }
 }
 

@@ -10,7 +10,7 @@
 //! - [`plain_estimate`]: the Monte Carlo estimate of the light field.
 
 use super::lights::Lobe;
-use super::probe::{DirectLight, LightField};
+use super::probe::{DirectLight, LightField, Outgoing};
 use super::proxy::{Element, ElementKind};
 use super::scene::Scene;
 use super::transport::{Settings, sample_lobe};
@@ -227,6 +227,20 @@ pub fn reference_gradient(
     settings: &Settings,
     seed: u64,
 ) -> TaylorRgb<D3> {
+    reference_gradient_towards(scene, x, Outgoing::Direction(omega_o), h, spp, settings, seed)
+}
+
+/// [`reference_gradient`] of L_s towards a fixed direction or towards a point (then
+/// each stencil point scatters towards it: the derivative of what a camera sees).
+pub fn reference_gradient_towards(
+    scene: &Scene,
+    x: DVec3,
+    out: Outgoing<DVec3>,
+    h: f64,
+    spp: u64,
+    settings: &Settings,
+    seed: u64,
+) -> TaylorRgb<D3> {
     let offsets = [
         DVec3::ZERO,
         DVec3::X,
@@ -238,7 +252,14 @@ pub fn reference_gradient(
     ];
     let v: Vec<Rgb> = offsets
         .par_iter()
-        .map(|&o| path_traced(scene, x + o * h, omega_o, spp, settings, seed).0)
+        .map(|&o| {
+            let p = x + o * h;
+            let omega_o = match out {
+                Outgoing::Direction(w) => w,
+                Outgoing::TowardsPoint(e) => (e - p).normalize_or(DVec3::Z),
+            };
+            path_traced(scene, p, omega_o, spp, settings, seed).0
+        })
         .collect();
     let ch = |c: usize| {
         let g = DVec3::new(v[1][c] - v[2][c], v[3][c] - v[4][c], v[5][c] - v[6][c]) / (2.0 * h);
