@@ -123,27 +123,31 @@ pub fn element_contribution(lf: &LightField, e: &Element, medium_clamp: f64) -> 
     ])
 }
 
+/// Elements summed per parallel task: the partial sums are added in a fixed order,
+/// so the result is the same bit for bit whatever the thread count.
+const SUM_CHUNK: usize = 2048;
+
 /// Ours: value, gradient and Hessian of L_s from the proxy elements.
 pub fn aware(lf: &LightField, elements: &[Element], settings: &AwareSettings) -> PartDerivs {
-    let (single, multiple) = elements
-        .par_iter()
-        .fold(
-            || (TaylorRgb::<D3>::default(), TaylorRgb::<D3>::default()),
-            |(mut s, mut m), e| {
-                if e.radiance != Rgb::ZERO {
-                    let c = element_contribution(lf, e, settings.medium_clamp);
-                    match e.kind {
-                        ElementKind::Surface => s += c,
-                        ElementKind::Medium => m += c,
-                    }
+    let partial: Vec<(TaylorRgb<D3>, TaylorRgb<D3>)> = elements
+        .par_chunks(SUM_CHUNK)
+        .map(|chunk| {
+            let (mut s, mut m) = (TaylorRgb::<D3>::default(), TaylorRgb::<D3>::default());
+            for e in chunk.iter().filter(|e| e.radiance != Rgb::ZERO) {
+                let c = element_contribution(lf, e, settings.medium_clamp);
+                match e.kind {
+                    ElementKind::Surface => s += c,
+                    ElementKind::Medium => m += c,
                 }
-                (s, m)
-            },
-        )
-        .reduce(
-            || (TaylorRgb::default(), TaylorRgb::default()),
-            |(a, b), (c, d)| (a + c, b + d),
-        );
+            }
+            (s, m)
+        })
+        .collect();
+    let (mut single, mut multiple) = (TaylorRgb::default(), TaylorRgb::default());
+    for (s, m) in partial {
+        single += s;
+        multiple += m;
+    }
     PartDerivs {
         direct: direct_derivatives(lf),
         single,

@@ -13,7 +13,7 @@ use super::render::{Rendered, camera};
 use super::scene::Scene;
 use super::transport::{radiance_leaving_hit, sample_lobe};
 use crate::core::color::{Rgb, luminance};
-use crate::core::rng::Sampler;
+use crate::core::rng::{Sampler, mix64};
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -50,17 +50,22 @@ pub fn reconstruct(
 /// parts) instead of cached: the same camera rays, march points and surface samples
 /// as [`reconstruct`] with the same parameters, so the difference between the two
 /// is the cache's error alone (common random numbers), up to this estimate's noise.
+/// The paths at a point draw from a stream of (`path_seed`, the point), so two
+/// references with different path seeds differ by their noise alone.
 pub fn march_reference(
     scene: &Scene,
     params: &CachedRenderParams,
     paths: u32,
+    path_seed: u64,
     progress: &Progress,
 ) -> Result<Reconstruction, Cancelled> {
     let paths = paths.max(1);
-    march_image(scene, params, progress, |p, lobe, sigma_s, s, rays| {
+    march_image(scene, params, progress, |p, lobe, sigma_s, _, rays| {
+        let point = mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits())));
+        let mut s = Sampler::new(path_seed, point);
         let mut sum = Rgb::ZERO;
         for _ in 0..paths {
-            sum += sample_lobe(scene, p, lobe, None, &params.image.settings, s, rays);
+            sum += sample_lobe(scene, p, lobe, None, &params.image.settings, &mut s, rays);
         }
         Some(sum * sigma_s / paths as f64)
     })

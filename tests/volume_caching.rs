@@ -1,0 +1,311 @@
+//! 3D radiance caching (issue 6 §4): ours against Jarosz et al. 2008 at equal cache
+//! count, agreement with the path tracer, determinism, coverage, records files and
+//! extreme parameters.
+
+use std::path::Path;
+use volcache::core::color::{Rgb, luminance};
+use volcache::core::metric::CacheMethod;
+use volcache::core::stats::ImageErrors;
+use volcache::progress::Progress;
+use volcache::volume::cached::{
+    CacheSettings, CachedRenderParams, RecordMemo, march_reference, place, reconstruct, render_cached,
+};
+use volcache::volume::records_file::{RecordsFile, ValidFor};
+use volcache::volume::render::render;
+use volcache::volume::scene::Scene;
+
+fn load(name: &str) -> Scene {
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes3d").join(name)).unwrap()
+}
+
+fn scene(json: &str) -> Scene {
+    Scene::from_json(json, "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A small image of `scene`: `w`×`h`, `spp` camera samples, march step scale/`k`.
+fn params(scene: &Scene, w: usize, h: usize, spp: u32, k: f64) -> CachedRenderParams {
+    let mut p = CachedRenderParams::from_scene(scene);
+    (p.image.width, p.image.height, p.image.spp, p.image.seed) = (w, h, spp, 7);
+    p.march_step = scene.scale / k;
+    p.surface_paths = 1;
+    p
+}
+
+fn settings(method: CacheMethod, scene: &Scene, rays: usize, steps: usize, seed: u64) -> CacheSettings {
+    let mut cs = CacheSettings::new(method, CacheSettings::default_eps(method, scene));
+    cs.probe.rays = rays;
+    cs.probe.steps = steps;
+    cs.seed = seed;
+    cs
+}
+
+fn errors(a: &[Rgb], b: &[Rgb]) -> ImageErrors {
+    let pairs: Vec<(f64, f64)> = a.iter().zip(b).map(|(x, y)| (luminance(*x), luminance(*y))).collect();
+    ImageErrors::of_luminance_pairs(&pairs)
+}
+
+fn mean(v: &[Rgb]) -> f64 {
+    v.iter().map(|c| luminance(*c)).sum::<f64>() / v.len() as f64
+}
+
+/// The paper's comparison, scaled down: on the staircase room at equal cache count,
+/// our records (occlusion-aware Hessian ellipsoids) reconstruct the in-scattered
+/// light along camera rays better than Jarosz et al. 2008's (unaware gradient
+/// balls), for several record seeds. Both are measured against the same camera
+/// samples with L_s path traced at every march point (the march reference), so the
+/// errors are the caches' own.
+#[test]
+fn ours_beats_jarosz08_at_equal_cache_count_on_the_staircase() {
+    let s = load("staircase.json");
+    let p = params(&s, 32, 24, 1, 64.0);
+    // Two references with independent path samples: their mean is the reference, and
+    // their difference measures its noise, which is taken out of the squared errors
+    // (E|c − r|² = |c − L|² + σ_r²: the caches' own errors, not the reference's).
+    let r1 = march_reference(&s, &p, 16, 1, &Progress::new()).unwrap().image.medium;
+    let r2 = march_reference(&s, &p, 16, 2, &Progress::new()).unwrap().image.medium;
+    let reference: Vec<Rgb> = r1.iter().zip(&r2).map(|(a, b)| (*a + *b) * 0.5).collect();
+    let noise2 = errors(&r1, &r2).rmse.powi(2) / 4.0;
+    eprintln!(
+        "march reference: 2 × 16 paths per point, RMS noise {:.4e}",
+        noise2.sqrt()
+    );
+    let mut sums = [0.0; 2];
+    let mut ratios = Vec::new();
+    for seed in 1..=4 {
+        let mut rmse = [0.0; 2];
+        for (k, method) in [CacheMethod::Ours, CacheMethod::Jarosz08].into_iter().enumerate() {
+            let cs = settings(method, &s, 512, 12, seed);
+            let r = render_cached(&s, &p, &cs, Some(60), &mut RecordMemo::new(), &Progress::new()).unwrap();
+            let e = errors(&r.reconstruction.image.medium, &reference);
+            let own = (e.rmse.powi(2) - noise2).max(0.0).sqrt();
+            eprintln!(
+                "seed {seed} {method:?}: {} records (ε {:.3e}), {} query points, medium RMSE {:.4e} \
+                 (without the reference's noise {own:.4e}; mean {:.4e}), placement {:.2} s, {} rays",
+                r.placement.cache.len(),
+                r.placement.eps,
+                r.placement.query_points,
+                e.rmse,
+                e.mean_reference,
+                r.placement.seconds,
+                r.rays()
+            );
+            assert_eq!(r.reconstruction.uncovered, 0);
+            // Placement counts are chaotic in ε (core::equal_count): ±10%.
+            assert!((r.placement.cache.len() as f64 - 60.0).abs() <= 6.0);
+            rmse[k] = own;
+            sums[k] += own;
+            assert!(e.rmse.powi(2) > 1.5 * noise2, "the reference is too noisy to judge");
+        }
+        ratios.push(rmse[0] / rmse[1]);
+    }
+    let ratio = sums[0] / sums[1];
+    eprintln!("RMSE ours / jarosz08 per seed: {ratios:.3?}; of the means over seeds {ratio:.3}");
+    // Measured: per seed 0.19, 0.32, 0.84, 0.53, of the means 0.36. Jarosz 2008's
+    // error swings with its seed (1.6e-2 to 7e-2: a few records with wrong gradients
+    // extrapolate far); ours stays at 1.3–1.6e-2.
+    assert!(ratio < 0.7, "{ratios:?}");
+    assert!(ratios.iter().all(|&r| r < 1.1), "{ratios:?}");
+}
+
+/// The cached image estimates what the path tracer does. With the same seed, the
+/// path tracer and a cached render trace the same camera rays; per pixel, path
+/// tracing's split of the image (first event a scattering or not) and the cached
+/// render's medium part (∫ T L_s dt by the march) and surface part (T L_o) estimate
+/// the same two integrals, so their differences average to zero over the image —
+/// for the march reference (L_s path traced at the march points) exactly, for the
+/// cache up to its interpolation error.
+#[test]
+fn cached_and_path_traced_images_agree_on_average() {
+    let s = load("fog_box.json");
+    let p = params(&s, 12, 12, 16, 64.0);
+    // 16× the samples: the first 16 of each pixel are the cached render's camera rays.
+    let mut many = p.image.clone();
+    many.spp *= 16;
+    let pt = render(&s, &many, &Progress::new()).unwrap();
+    let reference = march_reference(&s, &p, 8, 1, &Progress::new()).unwrap().image;
+    let cs = settings(CacheMethod::Ours, &s, 1024, 16, 1);
+    let cached = render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
+    let img = &cached.reconstruction.image;
+    let surface = |v: &[Rgb], m: &[Rgb]| -> Vec<f64> { v.iter().zip(m).map(|(a, b)| luminance(*a - *b)).collect() };
+    let medium = |m: &[Rgb]| -> Vec<f64> { m.iter().map(|c| luminance(*c)).collect() };
+    // Mean and standard error of the per-pixel differences a − b.
+    let diff = |a: &[f64], b: &[f64]| {
+        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+        let n = d.len() as f64;
+        let mu = d.iter().sum::<f64>() / n;
+        let var = d.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / (n - 1.0);
+        (mu, (var / n).sqrt(), b.iter().sum::<f64>() / n)
+    };
+    let (pt_med, pt_surf) = (medium(&pt.medium), surface(&pt.values, &pt.medium));
+    let checks = [
+        (
+            "march reference, medium",
+            diff(&medium(&reference.medium), &pt_med),
+            0.0,
+        ),
+        (
+            "march reference, surface",
+            diff(&surface(&reference.values, &reference.medium), &pt_surf),
+            0.0,
+        ),
+        ("ours, medium", diff(&medium(&img.medium), &pt_med), 0.02),
+        ("ours, surface", diff(&surface(&img.values, &img.medium), &pt_surf), 0.0),
+    ];
+    for (what, (mu, se, mean_pt), bias) in checks {
+        eprintln!("{what}: mean difference to path tracing {mu:+.5} ± {se:.5} (path tracing's mean {mean_pt:.5})");
+        assert!(mu.abs() < 4.0 * se + bias * mean_pt, "{what}");
+    }
+}
+
+/// Placement and reconstruction give the same records and image bit for bit with
+/// one and two threads, leave no query point uncovered, and a records file
+/// round-trips exactly (the reconstruction from it is the same image).
+#[test]
+fn deterministic_hole_free_and_records_round_trip() {
+    let s = load("fog_box.json");
+    let p = params(&s, 20, 20, 2, 48.0);
+    for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+        let cs = settings(method, &s, 256, 8, 3);
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap())
+        };
+        let (a, b) = (run(1), run(2));
+        assert_eq!(a.placement.cache.records(), b.placement.cache.records(), "{method:?}");
+        assert_eq!(
+            a.reconstruction.image.values, b.reconstruction.image.values,
+            "{method:?}"
+        );
+        assert_eq!(a.reconstruction.uncovered, 0);
+        assert!(
+            a.placement.cache.len() > 5,
+            "{method:?}: {} records",
+            a.placement.cache.len()
+        );
+        let file = RecordsFile::from_placement(&s, &p, method, &a.placement);
+        let text = serde_json::to_string(&file).unwrap();
+        let (back, cache) = RecordsFile::parse(&text, "records.json").unwrap();
+        assert_eq!(back, file);
+        assert_eq!(cache.records(), a.placement.cache.records());
+        assert_eq!(back.valid_for.mismatch(&ValidFor::of(&s, &p)), None);
+        let second_order = false;
+        let again = reconstruct(&s, &p, &cache, second_order, &Progress::new()).unwrap();
+        assert_eq!(again.image.values, a.reconstruction.image.values);
+        // Another image size, or another scene, is refused with the reason.
+        let mut other = p.clone();
+        other.image.width = 21;
+        assert!(
+            back.valid_for
+                .mismatch(&ValidFor::of(&s, &other))
+                .unwrap()
+                .contains("21x20")
+        );
+        let edited = scene(
+            &serde_json::to_string(&s.desc)
+                .unwrap()
+                .replace("\"g\":0.3", "\"g\":0.31"),
+        );
+        assert!(
+            back.valid_for
+                .mismatch(&ValidFor::of(&edited, &p))
+                .unwrap()
+                .contains("another scene")
+        );
+    }
+}
+
+/// Bad records files name the file and the JSON path.
+#[test]
+fn bad_records_files_are_clear_errors() {
+    let s = load("fog_box.json");
+    let p = params(&s, 6, 6, 1, 16.0);
+    let cs = settings(CacheMethod::Ours, &s, 64, 4, 1);
+    let placed = place(&s, &p, &cs, &mut RecordMemo::new(), &Progress::new()).unwrap();
+    let good = serde_json::to_value(RecordsFile::from_placement(&s, &p, CacheMethod::Ours, &placed)).unwrap();
+    let check = |v: serde_json::Value, want: &str| {
+        let err = RecordsFile::parse(&v.to_string(), "r.json").unwrap_err();
+        assert!(err.starts_with("r.json") && err.contains(want), "{err}");
+    };
+    let mut v = good.clone();
+    v["records"][0]["radii"][1] = serde_json::json!(-1.0);
+    check(v, "records[0]");
+    let mut v = good.clone();
+    v["records"][0]["value"][2][0] = serde_json::json!(null);
+    check(v, "records[0].value[2][0]");
+    let mut v = good.clone();
+    v["valid_for"]["colour"] = serde_json::json!(1);
+    check(v, "valid_for");
+    let mut v = good.clone();
+    v["format"] = serde_json::json!("something else");
+    check(v, "format");
+    let err = RecordsFile::parse("{not json", "r.json").unwrap_err();
+    assert!(err.starts_with("r.json"), "{err}");
+}
+
+/// Users push parameters to the extremes: nothing turns into NaN, inf or a hang.
+#[test]
+fn finite_at_extremes() {
+    let base = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes3d/fog_box.json")).unwrap();
+    let variants = [
+        ("g = 0.99", base.replace("\"g\": 0.3", "\"g\": 0.99")),
+        ("g = -0.99", base.replace("\"g\": 0.3", "\"g\": -0.99")),
+        (
+            "thin",
+            base.replace("\"sigma_s\": 0.35", "\"sigma_s\": 1e-6")
+                .replace("\"sigma_a\": 0.05", "\"sigma_a\": 0"),
+        ),
+        (
+            "thick",
+            base.replace("\"sigma_s\": 0.35", "\"sigma_s\": 300")
+                .replace("\"sigma_a\": 0.05", "\"sigma_a\": 700"),
+        ),
+    ];
+    for (name, text) in variants {
+        let s = scene(&text);
+        let p = params(&s, 6, 6, 1, 24.0);
+        for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+            for eps in [1e-12, 1e12] {
+                let mut cs = settings(method, &s, 64, 4, 1);
+                cs.eps = eps;
+                cs.second_order = true;
+                let r = render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
+                let img = &r.reconstruction.image;
+                assert!(
+                    img.values
+                        .iter()
+                        .chain(&img.medium)
+                        .all(|v| v.is_finite() && v.min_element() >= 0.0),
+                    "{name} {method:?} ε {eps}"
+                );
+                assert_eq!(r.reconstruction.uncovered, 0, "{name} {method:?} ε {eps}");
+            }
+        }
+    }
+}
+
+/// A scene without a medium pays nothing for caching: no query points, no records,
+/// no probe rays, and the image is the path-traced surfaces.
+#[test]
+fn no_medium_no_cost() {
+    let s = scene(
+        r#"{ "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov_deg": 40},
+             "shapes": [{"quad": {"origin": [-2, -2, 0], "u": [4, 0, 0], "v": [0, 4, 0]}, "reflectance": 0.5}],
+             "lights": [{"point": {"position": [0, 0, 1], "intensity": 1}}] }"#,
+    );
+    let p = params(&s, 8, 8, 1, 64.0);
+    let cs = settings(CacheMethod::Ours, &s, 256, 8, 1);
+    let r = render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
+    assert_eq!(
+        (r.placement.query_points, r.placement.cache.len(), r.placement.rays),
+        (0, 0, 0)
+    );
+    let img = &r.reconstruction.image;
+    assert!(img.medium.iter().all(|&m| m == Rgb::ZERO));
+    // A point light over a diffuse quad: both estimators are exact (NEE), on the same
+    // camera rays: (ρ/π) I cosθ / r² at every pixel's sample.
+    let pt = render(&s, &p.image, &Progress::new()).unwrap();
+    for (a, b) in img.values.iter().zip(&pt.values) {
+        assert!((*a - *b).abs().max_element() <= 1e-12 * b.max_element(), "{a} vs {b}");
+    }
+    assert!(img.values.iter().any(|v| v.x > 0.1));
+}
