@@ -1,5 +1,6 @@
-//! `volcache render3d` end to end: outputs and summary, clear errors for methods not
-//! built yet, bad crops and scenes, and Ctrl-C (exit 130, nothing written).
+//! `volcache render3d` and `merge3d` end to end: outputs and summary, cache methods
+//! with tiles sharing a records file, clear errors for bad options, crops, scenes and
+//! records files, and Ctrl-C (exit 130, nothing written).
 
 use std::process::Command;
 
@@ -73,65 +74,186 @@ fn time_budget_limits_the_samples() {
 }
 
 #[test]
-fn unimplemented_methods_and_bad_input_are_clear_errors() {
-    for method in ["ours", "jarosz08"] {
+fn bad_input_is_a_clear_error() {
+    let fails_with = |args: &[&str], want: &str| {
         let dir = tempfile::tempdir().unwrap();
-        let out = volcache()
-            .args(["render3d", "scenes3d/fog_box.json", "--method", method, "--out"])
-            .arg(dir.path())
-            .output()
-            .unwrap();
+        let out = volcache().args(args).arg("--out").arg(dir.path()).output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && err.contains("not implemented yet (issue 6)"),
-            "{err}"
-        );
+        assert!(!out.status.success() && err.contains(want), "{args:?}: {err}");
         assert_eq!(
             std::fs::read_dir(dir.path()).unwrap().count(),
             0,
-            "wrote output for {method}"
+            "{args:?} wrote output"
         );
+    };
+    let s = "scenes3d/fog_box.json";
+    fails_with(&["render3d", s, "--res", "10x10", "--crop", "0,0,11,5"], "--crop");
+    fails_with(&["render3d", "does/not/exist.json"], "does/not/exist.json");
+    fails_with(
+        &["render3d", s, "--method", "ours", "--time-budget", "5"],
+        "--time-budget",
+    );
+    fails_with(&["render3d", s, "--method", "ours", "--rays", "2"], "--rays");
+    fails_with(
+        &["render3d", s, "--method", "ours", "--march-step", "0"],
+        "--march-step",
+    );
+    fails_with(&["render3d", s, "--method", "ours", "--eps", "nan"], "--eps");
+    fails_with(&["render3d", s, "--res", "10x4", "--tile", "0/5"], "at most 4 tiles");
+    fails_with(&["render3d", s, "--tile", "3/3"], "0 <= i < n");
+    fails_with(
+        &["render3d", s, "--method", "ours", "--records-in", "missing.json"],
+        "missing.json",
+    );
+}
+
+/// A cache method's render split into tiles, each reconstructing from the records a
+/// full render placed (`--records-out`), merges into the full render bit for bit;
+/// records placed for another image are refused, and the summary has the costs.
+#[test]
+fn tiles_sharing_records_merge_into_the_full_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let base = [
+        "render3d",
+        "scenes3d/fog_box.json",
+        "--method",
+        "ours",
+        "--spp",
+        "2",
+        "--rays",
+        "256",
+        "--steps",
+        "8",
+        "--quiet",
+    ];
+    let run = |extra: &[&str]| {
+        let out = volcache().args(base).args(extra).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let path = |p: &str| d.join(p).display().to_string();
+    run(&[
+        "--caches",
+        "40",
+        "--records-out",
+        &path("records.json"),
+        "--out",
+        &path("full"),
+    ]);
+    for i in 0..3 {
+        let tile = format!("{i}/3");
+        run(&[
+            "--records-in",
+            &path("records.json"),
+            "--tile",
+            &tile,
+            "--out",
+            &path("tiles"),
+        ]);
     }
+    let tiles: Vec<String> = (0..3)
+        .map(|i| path(&format!("tiles/fog_box_ours_tile{i}of3.json")))
+        .collect();
     let out = volcache()
+        .arg("merge3d")
+        .args(&tiles)
+        .args(["--out", &path("merged")])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["fog_box_ours.exr", "fog_box_ours_medium.exr"] {
+        let (a, b) = (
+            std::fs::read(d.join("full").join(f)).unwrap(),
+            std::fs::read(d.join("merged").join(f)).unwrap(),
+        );
+        assert!(a == b, "{f}: merged tiles differ from the full render");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("full/fog_box_ours.json")).unwrap()).unwrap();
+    let records = json["cache"]["records"].as_u64().unwrap();
+    assert!((records as i64 - 40).abs() <= 4, "{records} records");
+    assert_eq!(json["cache"]["uncovered"], 0);
+    assert!(json["cache"]["placement_seconds"].as_f64().unwrap() > 0.0);
+    // Two tiles are not the image; the same tile twice covers rows twice.
+    let out = volcache()
+        .arg("merge3d")
+        .args(&tiles[..2])
+        .args(["--out", &path("bad")])
+        .output()
+        .unwrap();
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("exactly once"));
+    // Records placed for 24x18 cannot serve a 24x20 render.
+    let out = volcache()
+        .args(base)
         .args([
-            "render3d",
-            "scenes3d/fog_box.json",
             "--res",
-            "10x10",
-            "--crop",
-            "0,0,11,5",
+            "24x20",
+            "--records-in",
+            &path("records.json"),
+            "--out",
+            &path("bad"),
         ])
         .output()
         .unwrap();
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--crop"));
-    let out = volcache().args(["render3d", "does/not/exist.json"]).output().unwrap();
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("does/not/exist.json"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("records.json") && err.contains("24x20"),
+        "{err}"
+    );
+    // A damaged records file names itself and the JSON path.
+    std::fs::write(d.join("broken.json"), "{\"format\": 3}").unwrap();
+    let out = volcache()
+        .args(base)
+        .args([
+            "--res",
+            "24x18",
+            "--records-in",
+            &path("broken.json"),
+            "--out",
+            &path("bad"),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("broken.json") && err.contains("format"),
+        "{err}"
+    );
+    assert!(!d.join("bad").exists());
 }
 
 #[cfg(unix)]
 #[test]
 fn interrupt_writes_nothing() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut child = volcache()
-        .args([
+    for method in ["pt", "ours"] {
+        let dir = tempfile::tempdir().unwrap();
+        let records = dir.path().join("records.json");
+        let mut cmd = volcache();
+        cmd.args([
             "render3d",
             "scenes3d/staircase.json",
+            "--method",
+            method,
             "--res",
             "400x300",
-            "--spp",
-            "100000",
-            "--quiet",
-            "--out",
-        ])
-        .arg(dir.path())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(800));
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
-    assert_eq!(child.wait().unwrap().code(), Some(130));
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        ]);
+        if method == "pt" {
+            cmd.args(["--spp", "100000"]);
+        } else {
+            cmd.arg("--records-out").arg(&records);
+        }
+        let mut child = cmd.args(["--quiet", "--out"]).arg(dir.path()).spawn().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(800));
+        let killed = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        assert_eq!(child.wait().unwrap().code(), Some(130), "{method}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "{method}");
+    }
 }

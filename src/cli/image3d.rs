@@ -69,6 +69,9 @@ pub struct Summary3d {
     pub seconds: f64,
     pub rays: u64,
     pub rays_per_second: f64,
+    /// Camera samples (pixels × spp) and their rate.
+    pub samples: u64,
+    pub samples_per_second: f64,
     /// RMS per-pixel standard error over the mean (luminance).
     pub relative_std_error: f64,
     pub mean_luminance: f64,

@@ -150,6 +150,8 @@ pub fn run(a: Merge3dArgs) -> anyhow::Result<ExitCode> {
         seconds,
         rays,
         rays_per_second: rays as f64 / seconds.max(1e-9),
+        samples: (w * h) as u64 * first.spp as u64,
+        samples_per_second: (w * h) as f64 * first.spp as f64 / seconds.max(1e-9),
         relative_std_error: if mean > 0.0 {
             (var_sum / (w * h) as f64).sqrt() / mean
         } else {

@@ -103,6 +103,8 @@ pub fn summary(scene: &Scene, method: Method, params: &RenderParams, img: &Rende
         seconds: img.seconds,
         rays: img.rays,
         rays_per_second: img.rays as f64 / img.seconds.max(1e-9),
+        samples: (img.width * img.height) as u64 * img.spp as u64,
+        samples_per_second: (img.width * img.height) as f64 * img.spp as f64 / img.seconds.max(1e-9),
         relative_std_error: img.relative_std_error(),
         mean_luminance: mean_luminance(&img.values),
         exposure: scene.desc.render.exposure,
