@@ -23,6 +23,9 @@ pub enum BenchCommand {
     Derivatives(super::bench_derivs::DerivBench),
     /// Error vs time and vs cache count: ours, jarosz08 (ε swept) and pt (spp swept).
     Tradeoff(super::bench_tradeoff::TradeoffArgs),
+    /// 3D error vs time and vs cache count: ours, jarosz08 (record counts swept) and
+    /// pt (spp swept), with the speedup of ours over jarosz08 at equal error.
+    Tradeoff3d(super::bench_tradeoff3d::Tradeoff3dArgs),
 }
 
 #[derive(Args, Debug)]
@@ -82,6 +85,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<ExitCode> {
         BenchCommand::Flatland(b) => flatland(b),
         BenchCommand::Derivatives(b) => super::bench_derivs::run(b),
         BenchCommand::Tradeoff(b) => super::bench_tradeoff::run(b),
+        BenchCommand::Tradeoff3d(b) => super::bench_tradeoff3d::run(b),
     }
 }
 

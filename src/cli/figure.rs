@@ -52,6 +52,10 @@ pub enum FigureCommand {
     /// Reference, ours and Jarosz 2008 side by side at equal cache count: fields, cache
     /// distributions and error maps, with records, rays, time and RMSE in the captions.
     Compare(super::figure_compare::CompareArgs),
+    /// 3D: reference, ours and Jarosz 2008 at equal cache count and path tracing at
+    /// equal time, with zoomed insets, records projected into the image, error maps
+    /// and the numbers.
+    Compare3d(super::figure_compare3d::Compare3dArgs),
 }
 
 /// A segment `X0,Y0,X1,Y1` in world units.
@@ -526,6 +530,7 @@ pub fn run(cmd: FigureCommand) -> anyhow::Result<ExitCode> {
     match cmd {
         FigureCommand::Gradients(a) => gradients(a),
         FigureCommand::Compare(a) => super::figure_compare::run(a),
+        FigureCommand::Compare3d(a) => super::figure_compare3d::run(a),
     }
 }
 

@@ -10,7 +10,7 @@ use super::common::{ProgressUi, parse_res};
 use super::image3d::{
     CacheSummary, Summary3d, mean_luminance, parse_crop, parse_tile, reference_errors, set_window, write_outputs,
 };
-use super::render3d_cache::{Cache3dArgs, run_cached};
+use super::render3d_cache::{Cache3dArgs, RecordsArgs, run_cached};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -71,6 +71,8 @@ pub struct Render3dArgs {
     pub tile: Option<[usize; 2]>,
     #[command(flatten)]
     pub cache: Cache3dArgs,
+    #[command(flatten)]
+    pub records: RecordsArgs,
     /// A reference EXR of the same window (e.g. a long `--method pt` render): RMSE and
     /// relMSE of the image, and of its medium part when `<reference>_medium.exr` exists.
     #[arg(long)]
@@ -159,7 +161,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
             .map(|img| (Some(img), None))
             .map_err(anyhow::Error::from),
         Method::Ours | Method::Jarosz08 => {
-            run_cached(&scene, &params, a.method, &a.cache, &ui.progress).map(|(img, c)| (img, Some(c)))
+            run_cached(&scene, &params, a.method, &a.cache, &a.records, &ui.progress).map(|(img, c)| (img, Some(c)))
         }
     };
     ui.finish();

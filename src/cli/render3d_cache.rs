@@ -47,6 +47,11 @@ pub struct Cache3dArgs {
     /// Seed of the records' light fields.
     #[arg(long, default_value_t = 1)]
     pub cache_seed: u64,
+}
+
+/// How `render3d` shares records between jobs.
+#[derive(Args, Debug, Clone)]
+pub struct RecordsArgs {
     /// Reconstruct from these records (from `--records-out` for this image) instead
     /// of placing.
     #[arg(long, conflicts_with_all = ["eps", "caches", "records_out"])]
@@ -113,11 +118,12 @@ pub fn run_cached(
     image: &RenderParams,
     method: Method,
     a: &Cache3dArgs,
+    records: &RecordsArgs,
     progress: &Progress,
 ) -> anyhow::Result<(Option<Rendered>, CacheSummary)> {
     let method = cache_method(method);
     let (cs, cp) = a.settings(scene, image, method)?;
-    let placement = match &a.records_in {
+    let placement = match &records.records_in {
         Some(path) => {
             let (file, cache) = RecordsFile::load(path).map_err(|e| anyhow::anyhow!("--records-in {e}"))?;
             anyhow::ensure!(
@@ -146,7 +152,7 @@ pub fn run_cached(
             }
         }
     };
-    if let Some(path) = &a.records_out {
+    if let Some(path) = &records.records_out {
         let file = RecordsFile::from_placement(scene, &cp, method, &placement);
         wrote(path, write_json(path, &file))?;
     }
@@ -164,10 +170,10 @@ pub fn run_cached(
         reconstruction_seconds: 0.0,
         reconstruction_rays: 0,
         uncovered: 0,
-        records_in: a.records_in.as_ref().map(|p| p.display().to_string()),
-        records_out: a.records_out.as_ref().map(|p| p.display().to_string()),
+        records_in: records.records_in.as_ref().map(|p| p.display().to_string()),
+        records_out: records.records_out.as_ref().map(|p| p.display().to_string()),
     };
-    if a.place_only {
+    if records.place_only {
         return Ok((None, summary));
     }
     let second_order = cs.second_order && method == CacheMethod::Ours;
@@ -178,7 +184,7 @@ pub fn run_cached(
     let mut img = r.image;
     // The image's cost is the whole method's: placement (when it was done here, not
     // read from a file shared by tiles) plus reconstruction.
-    if a.records_in.is_none() {
+    if records.records_in.is_none() {
         img.seconds += placement.seconds;
         img.rays += placement.rays;
     }

@@ -75,6 +75,32 @@ impl ImageErrors {
     }
 }
 
+/// The time a method needs to reach error `e`, from its (time, error) runs: on the
+/// Pareto front (runs no faster run beats), interpolated log-log between the last
+/// run above `e` and the first at or below it. None when no run reaches `e`, or
+/// every run is already below it (the curve says nothing there).
+pub fn time_to_error(runs: &[(f64, f64)], e: f64) -> Option<f64> {
+    let mut sorted: Vec<(f64, f64)> = runs
+        .iter()
+        .copied()
+        .filter(|(t, err)| *t > 0.0 && *err > 0.0 && t.is_finite() && err.is_finite())
+        .collect();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut front: Vec<(f64, f64)> = Vec::new();
+    for p in sorted {
+        if front.last().is_none_or(|l| p.1 < l.1) {
+            front.push(p);
+        }
+    }
+    let k = front.iter().position(|p| p.1 <= e)?;
+    if k == 0 {
+        return None;
+    }
+    let ((t0, e0), (t1, e1)) = (front[k - 1], front[k]);
+    let f = (e.ln() - e0.ln()) / (e1.ln() - e0.ln());
+    Some((t0.ln() + f * (t1.ln() - t0.ln())).exp())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,5 +115,16 @@ mod tests {
         assert!((s.mean() - mean).abs() < 1e-12);
         assert!((s.variance() - var).abs() < 1e-12);
         assert_eq!(rmse(&[1.0, 2.0], &[1.0, 4.0]), 2f64.sqrt());
+    }
+
+    #[test]
+    fn time_to_error_on_the_pareto_front() {
+        // error = 1/√t, with a dominated run (slower and worse) ignored.
+        let runs = [(1.0, 1.0), (4.0, 0.5), (9.0, 0.8), (16.0, 0.25)];
+        assert!((time_to_error(&runs, 0.5).unwrap() - 4.0).abs() < 1e-12);
+        // Log-log interpolation is exact on a power law.
+        assert!((time_to_error(&runs, 0.35355339059327373).unwrap() - 8.0).abs() < 1e-9);
+        assert_eq!(time_to_error(&runs, 0.1), None);
+        assert_eq!(time_to_error(&runs, 2.0), None);
     }
 }

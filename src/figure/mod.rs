@@ -14,6 +14,8 @@
 //! - [`records`]: cache records drawn as their extents (the point-distribution
 //!   insets), alone or over the scene and a dimmed field.
 //! - [`error_map`]: per-pixel error against a reference in false colour.
+//! - [`image3d`]: rendered 3D images: enlarged, zoomed insets, records projected
+//!   into the image, error maps.
 //! - [`compose`]: finished figures composed into captioned rows.
 //!
 //! Files are written by [`crate::output`] (atomic PNG/EXR/JSON writers).
@@ -26,6 +28,7 @@ pub mod error_map;
 pub mod field_figure;
 pub mod gradient_color;
 pub mod gradient_figure;
+pub mod image3d;
 pub mod overlay;
 pub mod panel;
 pub mod plot;
