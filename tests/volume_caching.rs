@@ -44,10 +44,6 @@ fn errors(a: &[Rgb], b: &[Rgb]) -> ImageErrors {
     ImageErrors::of_luminance_pairs(&pairs)
 }
 
-fn mean(v: &[Rgb]) -> f64 {
-    v.iter().map(|c| luminance(*c)).sum::<f64>() / v.len() as f64
-}
-
 /// The paper's comparison, scaled down: on the staircase room at equal cache count,
 /// our records (occlusion-aware Hessian ellipsoids) reconstruct the in-scattered
 /// light along camera rays better than Jarosz et al. 2008's (unaware gradient

@@ -7,7 +7,7 @@
 
 use super::common::{ProgressUi, parse_res, wrote};
 use super::render3d_cache::Cache3dArgs;
-use super::runs3d::{ReferenceInfo3d, Run3d, reference3d, run_cache, run_pt};
+use super::runs3d::{ReferenceInfo3d, Run3d, Setup3d, pt_seed, run_cache, run_pt, setup3d};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -20,7 +20,6 @@ use volcache::figure::plot::{LineStyle, Plot, Series, draw_plot_into};
 use volcache::output::{write_json, write_png};
 use volcache::volume::cached::RecordMemo;
 use volcache::volume::render::RenderParams;
-use volcache::volume::scene::Scene;
 
 #[derive(Args, Debug)]
 pub struct Tradeoff3dArgs {
@@ -111,24 +110,13 @@ fn speedups(runs: &[Run3d]) -> Vec<Speedup> {
 }
 
 pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
-    let scene = Scene::load(&a.scene)?;
-    let stem = a
-        .scene
-        .file_stem()
-        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-    let mut image = RenderParams::from_scene(&scene);
-    match a.res {
-        Some([w, h]) => (image.width, image.height) = (w as usize, h as usize),
-        None => (image.width, image.height) = ((image.width / 2).max(1), (image.height / 2).max(1)),
-    }
-    anyhow::ensure!(a.spp > 0 && a.ref_spp > 0, "--spp and --ref-spp must be at least 1");
-    (image.spp, image.seed) = (a.spp, a.seed);
-    let ref_params = RenderParams {
-        spp: a.ref_spp,
-        seed: a.seed ^ 0x5EED,
-        ..image.clone()
-    };
-    let (reference, ref_info) = reference3d(&scene, &ref_params, &a.ref_cache, a.quiet)?;
+    let Setup3d {
+        scene,
+        stem,
+        image,
+        reference,
+        ref_info,
+    } = setup3d(&a.scene, a.res, (a.spp, a.seed, a.ref_spp), &a.ref_cache, a.quiet)?;
     let mut runs = Vec::new();
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
         let mut memo = RecordMemo::new();
@@ -156,7 +144,7 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
     for &spp in &a.spps {
         let p = RenderParams {
             spp,
-            seed: a.seed ^ 0xB7,
+            seed: pt_seed(a.seed),
             ..image.clone()
         };
         let ui = ProgressUi::new(&format!("{stem} pt {spp} spp"), !a.quiet);

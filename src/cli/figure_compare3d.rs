@@ -7,7 +7,7 @@
 use super::common::{ProgressUi, parse_res, wrote};
 use super::image3d::{as_field, parse_crop};
 use super::render3d_cache::Cache3dArgs;
-use super::runs3d::{ReferenceInfo3d, Run3d, reference3d, run_cache, run_pt};
+use super::runs3d::{ReferenceInfo3d, Run3d, Setup3d, pt_seed, run_cache, run_pt, setup3d};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -22,7 +22,6 @@ use volcache::figure::{Cell, compose_grid, shared_error_range, upscale_factor};
 use volcache::output::{write_exr, write_json, write_png};
 use volcache::volume::cached::RecordMemo;
 use volcache::volume::render::{RenderParams, camera};
-use volcache::volume::scene::Scene;
 
 #[derive(Args, Debug)]
 pub struct Compare3dArgs {
@@ -79,28 +78,17 @@ fn caption(r: &Run3d) -> String {
 }
 
 pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
-    let scene = Scene::load(&a.scene)?;
-    let stem = a
-        .scene
-        .file_stem()
-        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-    let mut image = RenderParams::from_scene(&scene);
-    match a.res {
-        Some([w, h]) => (image.width, image.height) = (w as usize, h as usize),
-        None => (image.width, image.height) = ((image.width / 2).max(1), (image.height / 2).max(1)),
-    }
-    anyhow::ensure!(a.spp > 0 && a.ref_spp > 0, "--spp and --ref-spp must be at least 1");
-    (image.spp, image.seed) = (a.spp, a.seed);
+    let Setup3d {
+        scene,
+        stem,
+        image,
+        reference,
+        ref_info,
+    } = setup3d(&a.scene, a.res, (a.spp, a.seed, a.ref_spp), &a.ref_cache, a.quiet)?;
     let mut cache = a.cache.clone();
     if cache.caches.is_none() && cache.eps.is_none() {
         cache.caches = Some(200);
     }
-    let ref_params = RenderParams {
-        spp: a.ref_spp,
-        seed: a.seed ^ 0x5EED,
-        ..image.clone()
-    };
-    let (reference, ref_info) = reference3d(&scene, &ref_params, &a.ref_cache, a.quiet)?;
     let mut runs = Vec::new();
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
         let ui = ProgressUi::new(&format!("{stem} {method:?}"), !a.quiet);
@@ -120,7 +108,7 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
     // Path tracing in the time ours took (its own seed: not the caches' camera rays).
     let pt_params = RenderParams {
         spp: 1 << 24,
-        seed: a.seed ^ 0xB7,
+        seed: pt_seed(a.seed),
         time_budget: Some(runs[0].seconds),
         ..image.clone()
     };

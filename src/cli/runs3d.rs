@@ -82,6 +82,55 @@ pub fn reference3d(
     Ok((img, info))
 }
 
+/// What a comparison runs on: the scene, its name, the image the caches render
+/// (half the scene's resolution unless given) and the converged reference.
+pub struct Setup3d {
+    pub scene: Scene,
+    pub stem: String,
+    pub image: RenderParams,
+    pub reference: Rendered,
+    pub ref_info: ReferenceInfo3d,
+}
+
+/// Load `scene_path`, size the image and get the reference (`ref_spp`, its own seed).
+pub fn setup3d(
+    scene_path: &Path,
+    res: Option<[u32; 2]>,
+    (spp, seed, ref_spp): (u32, u64, u32),
+    ref_cache: &Path,
+    quiet: bool,
+) -> anyhow::Result<Setup3d> {
+    let scene = Scene::load(scene_path)?;
+    let stem = scene_path
+        .file_stem()
+        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let mut image = RenderParams::from_scene(&scene);
+    match res {
+        Some([w, h]) => (image.width, image.height) = (w as usize, h as usize),
+        None => (image.width, image.height) = ((image.width / 2).max(1), (image.height / 2).max(1)),
+    }
+    anyhow::ensure!(spp > 0 && ref_spp > 0, "--spp and --ref-spp must be at least 1");
+    (image.spp, image.seed) = (spp, seed);
+    let ref_params = RenderParams {
+        spp: ref_spp,
+        seed: seed ^ 0x5EED,
+        ..image.clone()
+    };
+    let (reference, ref_info) = reference3d(&scene, &ref_params, ref_cache, quiet)?;
+    Ok(Setup3d {
+        scene,
+        stem,
+        image,
+        reference,
+        ref_info,
+    })
+}
+
+/// Path tracing's own seed in comparisons (not the caches' camera rays).
+pub fn pt_seed(seed: u64) -> u64 {
+    seed ^ 0xB7
+}
+
 /// One method's image, cost and errors.
 #[derive(Clone, Debug, Serialize)]
 pub struct Run3d {
