@@ -10,6 +10,6 @@ cargo build --release
 V=target/release/volcache
 COMMON=(--spp 4 --rays 4096 --steps 24 --ref-spp 8192)
 $V bench tradeoff3d scenes3d/staircase.json --res 160x120 "${COMMON[@]}" \
-    --counts 100,200,400,800,1600 --spps 4,16,64,256,1024 --out results
+    --counts 25,50,100,200,400,800,1600 --spps 4,16,64,256,1024 --out results
 $V figure compare3d scenes3d/staircase.json --res 160x120 "${COMMON[@]}" --caches 800 --out results/compare3d
 $V figure compare3d scenes3d/fog_box.json --res 128x128 "${COMMON[@]}" --caches 400 --out results/compare3d

@@ -62,7 +62,8 @@ pub struct Render3dArgs {
     #[arg(long)]
     pub time_budget: Option<f64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full image (same samples as
-    /// the full render, so crops tile it).
+    /// the full render, so crops tile it; cache methods: when they reconstruct from
+    /// the full image's records, --records-in, else they place records for the crop).
     #[arg(long, value_parser = parse_crop, conflicts_with = "tile")]
     pub crop: Option<[usize; 4]>,
     /// Render tile i of n (0 ≤ i < n): rows [i·H/n, (i+1)·H/n). Outputs are named

@@ -17,16 +17,20 @@
 //! the cache as it was at the batch's start, then their uncovered points are
 //! re-checked and filled in order: the result does not depend on the thread count.
 //! Each record's light field is captured in parallel over its rays. Methods:
-//! - `ours`: occlusion-aware value, gradient and Hessian (`derivatives::aware`),
-//!   extent = the seed's Hessian ellipsoid;
-//! - `jarosz08`: occlusion-unaware value and gradient, extent = the gradient ball.
+//! - `ours`: occlusion-aware gradient and Hessian (`derivatives::aware`), extent =
+//!   the seed's Hessian ellipsoid;
+//! - `jarosz08`: occlusion-unaware gradient (`derivatives::unaware`), extent = the
+//!   gradient ball.
+//!
+//! Both store the light field's plain Monte Carlo estimate as the value, so at equal
+//! record positions they differ only in derivatives and extents.
 //!
 //! Light fields are memoised per query point ([`RecordMemo`]) with the seconds they
 //! took, so an equal-count search pays for each point once and a placement's time
 //! is still what a fresh placement would take (checks plus its records' capture).
 
 use super::camera_march::{CameraRay, QueryKey};
-use super::derivatives::{AwareSettings, aware, unaware};
+use super::derivatives::{AwareSettings, aware, plain_estimate, unaware};
 use super::probe::{Outgoing, ProbeSettings, capture_towards};
 use super::proxy::{self, Element};
 pub use super::reconstruct::{Reconstruction, march_reference, reconstruct};
@@ -219,9 +223,9 @@ pub fn compute_record(
             // the baseline's); the proxy gives the derivatives. The proxy's own value
             // is 4–8% low where emitters' outlines cross the direction triangles (the
             // farther-vertex rule darkens them), which would bias every pixel.
-            let plain = unaware(&lf);
+            let [_, single, multiple] = plain_estimate(&lf);
             let mut value = parts.single + parts.multiple;
-            let mean = plain.single.value() + plain.multiple.value();
+            let mean = single + multiple;
             for (c, ch) in value.channels.iter_mut().enumerate() {
                 ch.value = mean[c];
             }
