@@ -90,35 +90,41 @@ fn curve(runs: &[Run3d], method: &str, x: impl Fn(&Run3d) -> f64, medium: bool) 
     v
 }
 
-/// At the errors Jarosz 2008 reached, the time each method needs (Pareto fronts,
-/// log-log interpolation). Jarosz 2008's time is taken at its own runs; where ours'
-/// fastest run already beats the error, its time bounds the speedup from below.
 fn speedups(runs: &[Run3d]) -> Vec<Speedup> {
+    [("image", false), ("medium", true)]
+        .into_iter()
+        .flat_map(|(of, medium)| {
+            let ours = curve(runs, "ours", |r| r.seconds, medium);
+            let jarosz = curve(runs, "jarosz08", |r| r.seconds, medium);
+            speedups_of(of, &ours, &jarosz)
+        })
+        .collect()
+}
+
+/// At the errors Jarosz 2008 reached, the time each method needs, from (seconds,
+/// error) runs sorted by time. Jarosz 2008's time is taken at its own Pareto-optimal
+/// runs; ours' is interpolated on its Pareto front (`time_to_error`), and where ours'
+/// fastest run already beats the error, that run's time bounds the speedup from below.
+fn speedups_of(of: &'static str, ours: &[(f64, f64)], jarosz: &[(f64, f64)]) -> Vec<Speedup> {
     let mut out = Vec::new();
-    for (of, medium) in [("image", false), ("medium", true)] {
-        let ours = curve(runs, "ours", |r| r.seconds, medium);
-        let jarosz = curve(runs, "jarosz08", |r| r.seconds, medium);
-        let fastest_ours = ours.first().copied();
-        for (i, &(tj, e)) in jarosz.iter().enumerate() {
-            // Only Jarosz 2008's Pareto-optimal runs: a slower run with a larger
-            // error says nothing about the time that error needs.
-            if jarosz[..i].iter().any(|p| p.1 <= e) {
-                continue;
-            }
-            let (to, lower_bound) = match (time_to_error(&ours, e), fastest_ours) {
-                (Some(to), _) => (to, false),
-                (None, Some((t0, e0))) if e0 <= e => (t0, true),
-                _ => continue,
-            };
-            out.push(Speedup {
-                of,
-                error: e,
-                seconds_ours: to,
-                seconds_jarosz08: tj,
-                speedup: tj / to,
-                lower_bound,
-            });
+    for (i, &(tj, e)) in jarosz.iter().enumerate() {
+        // A slower run with a larger error says nothing about the time that error needs.
+        if jarosz[..i].iter().any(|p| p.1 <= e) {
+            continue;
         }
+        let (to, lower_bound) = match (time_to_error(ours, e), ours.first()) {
+            (Some(to), _) => (to, false),
+            (None, Some(&(t0, e0))) if e0 <= e => (t0, true),
+            _ => continue,
+        };
+        out.push(Speedup {
+            of,
+            error: e,
+            seconds_ours: to,
+            seconds_jarosz08: tj,
+            speedup: tj / to,
+            lower_bound,
+        });
     }
     out
 }
@@ -249,4 +255,34 @@ fn tradeoff_plot(stem: &str, runs: &[Run3d]) -> tiny_skia::Pixmap {
         draw_plot_into(&mut pix, (640.0 * k as f32, 0.0, 640.0, 480.0), p);
     }
     pix
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn speedups_at_jarosz_pareto_runs_with_lower_bounds() {
+        // The staircase's medium errors (results/tradeoff3d_staircase.json), rounded.
+        let ours = [(6.4, 0.0185), (7.8, 0.0176), (12.9, 0.0154), (20.7, 0.0109)];
+        let jarosz = [
+            (7.2, 0.0268),
+            (8.9, 0.0180),
+            (13.0, 0.0228),
+            (21.4, 0.0174),
+            (67.7, 0.0182),
+        ];
+        let s = speedups_of("medium", &ours, &jarosz);
+        let errors: Vec<f64> = s.iter().map(|s| s.error).collect();
+        assert_eq!(errors, [0.0268, 0.0180, 0.0174], "dominated runs skipped");
+        // 0.0268: ours' fastest run is already below it, so only a lower bound.
+        assert!(s[0].lower_bound && s[0].seconds_ours == 6.4);
+        assert!((s[0].speedup - 7.2 / 6.4).abs() < 1e-12);
+        // 0.0180: interpolated log-log between ours' first two runs.
+        assert!(!s[1].lower_bound && s[1].seconds_ours > 6.4 && s[1].seconds_ours < 7.8);
+        assert!(s[1].speedup > 1.1 && s[1].speedup < 1.4, "{}", s[1].speedup);
+        assert!(s[2].speedup > 2.4 && s[2].speedup < 2.9, "{}", s[2].speedup);
+        // Errors ours never reaches give nothing.
+        assert!(speedups_of("medium", &[(10.0, 0.05)], &jarosz).is_empty());
+    }
 }
