@@ -5,9 +5,9 @@
 //! of the image and of its medium part against one converged reference. Reports
 //! rays/s, records/s and the speedup of ours over Jarosz 2008 at equal error.
 
-use super::common::{ProgressUi, parse_res, wrote};
+use super::common::{ProgressUi, wrote};
 use super::render3d_cache::Cache3dArgs;
-use super::runs3d::{ReferenceInfo3d, Run3d, Setup3d, pt_seed, run_cache, run_pt, setup3d};
+use super::runs3d::{ReferenceInfo3d, Run3d, Setup3d, Setup3dArgs, pt_seed, run_cache, run_pt, setup3d};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -23,16 +23,8 @@ use volcache::volume::render::RenderParams;
 
 #[derive(Args, Debug)]
 pub struct Tradeoff3dArgs {
-    /// Scene JSON (see scenes3d/).
-    pub scene: PathBuf,
-    /// Resolution WxH (default: half the scene's).
-    #[arg(long, value_parser = parse_res)]
-    pub res: Option<[u32; 2]>,
-    /// Camera samples per pixel of the caches.
-    #[arg(long, default_value_t = 4)]
-    pub spp: u32,
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub setup: Setup3dArgs,
     /// Target record counts for the cache methods.
     #[arg(long, value_delimiter = ',', default_values_t = [50usize, 100, 200, 400, 800])]
     pub counts: Vec<usize>,
@@ -41,11 +33,6 @@ pub struct Tradeoff3dArgs {
     pub spps: Vec<u32>,
     #[command(flatten)]
     pub cache: Cache3dArgs,
-    /// Samples per pixel of the path-traced reference.
-    #[arg(long, default_value_t = 4096)]
-    pub ref_spp: u32,
-    #[arg(long, default_value = "out/reference_cache3d")]
-    pub ref_cache: PathBuf,
     #[arg(long, default_value = "results")]
     pub out: PathBuf,
     #[arg(long)]
@@ -136,7 +123,7 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
         image,
         reference,
         ref_info,
-    } = setup3d(&a.scene, a.res, (a.spp, a.seed, a.ref_spp), &a.ref_cache, a.quiet)?;
+    } = setup3d(&a.setup, a.quiet)?;
     let mut runs = Vec::new();
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
         let mut memo = RecordMemo::new();
@@ -164,7 +151,7 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
     for &spp in &a.spps {
         let p = RenderParams {
             spp,
-            seed: pt_seed(a.seed),
+            seed: pt_seed(a.setup.seed),
             ..image.clone()
         };
         let ui = ProgressUi::new(&format!("{stem} pt {spp} spp"), !a.quiet);

@@ -4,10 +4,10 @@
 //! maps on one range, and the numbers (records, time, rays, RMSE of the image and of
 //! its medium part) in the captions and a JSON report.
 
-use super::common::{ProgressUi, parse_res, wrote};
+use super::common::{ProgressUi, wrote};
 use super::image3d::{as_field, parse_crop};
 use super::render3d_cache::Cache3dArgs;
-use super::runs3d::{ReferenceInfo3d, Run3d, Setup3d, pt_seed, run_cache, run_pt, setup3d};
+use super::runs3d::{ReferenceInfo3d, Run3d, Setup3d, Setup3dArgs, pt_seed, run_cache, run_pt, setup3d};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -25,24 +25,10 @@ use volcache::volume::render::{RenderParams, camera};
 
 #[derive(Args, Debug)]
 pub struct Compare3dArgs {
-    /// Scene JSON (see scenes3d/).
-    pub scene: PathBuf,
-    /// Resolution WxH (default: half the scene's).
-    #[arg(long, value_parser = parse_res)]
-    pub res: Option<[u32; 2]>,
-    /// Camera samples per pixel of the caches.
-    #[arg(long, default_value_t = 4)]
-    pub spp: u32,
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub setup: Setup3dArgs,
     #[command(flatten)]
     pub cache: Cache3dArgs,
-    /// Samples per pixel of the path-traced reference.
-    #[arg(long, default_value_t = 4096)]
-    pub ref_spp: u32,
-    /// Where references are kept between runs.
-    #[arg(long, default_value = "out/reference_cache3d")]
-    pub ref_cache: PathBuf,
     /// The zoomed window x0,y0,x1,y1 (default: where the two caches differ most).
     #[arg(long, value_parser = parse_crop)]
     pub inset: Option<[usize; 4]>,
@@ -84,7 +70,7 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
         image,
         reference,
         ref_info,
-    } = setup3d(&a.scene, a.res, (a.spp, a.seed, a.ref_spp), &a.ref_cache, a.quiet)?;
+    } = setup3d(&a.setup, a.quiet)?;
     let mut cache = a.cache.clone();
     if cache.caches.is_none() && cache.eps.is_none() {
         cache.caches = Some(200);
@@ -108,7 +94,7 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
     // Path tracing in the time ours took (its own seed: not the caches' camera rays).
     let pt_params = RenderParams {
         spp: 1 << 24,
-        seed: pt_seed(a.seed),
+        seed: pt_seed(a.setup.seed),
         time_budget: Some(runs[0].seconds),
         ..image.clone()
     };

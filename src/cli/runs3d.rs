@@ -3,11 +3,12 @@
 //! (or ε), path tracing at a sample count or a time budget, each with its cost and
 //! its errors against the reference (whole image and medium part).
 
-use super::common::ProgressUi;
+use super::common::{ProgressUi, parse_res};
 use super::image3d::{as_field, errors, medium_path, read_image};
 use super::render3d_cache::Cache3dArgs;
+use clap::Args;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use volcache::core::metric::CacheMethod;
 use volcache::core::rng::fnv1a;
 use volcache::core::stats::ImageErrors;
@@ -92,20 +93,36 @@ pub struct Setup3d {
     pub ref_info: ReferenceInfo3d,
 }
 
-/// Load `scene_path`, size the image and get the reference (`ref_spp`, its own seed).
-pub fn setup3d(
-    scene_path: &Path,
-    res: Option<[u32; 2]>,
-    (spp, seed, ref_spp): (u32, u64, u32),
-    ref_cache: &Path,
-    quiet: bool,
-) -> anyhow::Result<Setup3d> {
+/// What a comparison renders and against which reference.
+#[derive(Args, Debug)]
+pub struct Setup3dArgs {
+    /// Scene JSON (see scenes3d/).
+    pub scene: PathBuf,
+    /// Resolution WxH (default: half the scene's).
+    #[arg(long, value_parser = parse_res)]
+    pub res: Option<[u32; 2]>,
+    /// Camera samples per pixel of the caches.
+    #[arg(long, default_value_t = 4)]
+    pub spp: u32,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Samples per pixel of the path-traced reference.
+    #[arg(long, default_value_t = 4096)]
+    pub ref_spp: u32,
+    /// Where references are kept between runs.
+    #[arg(long, default_value = "out/reference_cache3d")]
+    pub ref_cache: PathBuf,
+}
+
+/// Load the scene, size the image and get the reference (`ref_spp`, its own seed).
+pub fn setup3d(a: &Setup3dArgs, quiet: bool) -> anyhow::Result<Setup3d> {
+    let (scene_path, spp, seed, ref_spp) = (&a.scene, a.spp, a.seed, a.ref_spp);
     let scene = Scene::load(scene_path)?;
     let stem = scene_path
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let mut image = RenderParams::from_scene(&scene);
-    match res {
+    match a.res {
         Some([w, h]) => (image.width, image.height) = (w as usize, h as usize),
         None => (image.width, image.height) = ((image.width / 2).max(1), (image.height / 2).max(1)),
     }
@@ -116,7 +133,7 @@ pub fn setup3d(
         seed: seed ^ 0x5EED,
         ..image.clone()
     };
-    let (reference, ref_info) = reference3d(&scene, &ref_params, ref_cache, quiet)?;
+    let (reference, ref_info) = reference3d(&scene, &ref_params, &a.ref_cache, quiet)?;
     Ok(Setup3d {
         scene,
         stem,

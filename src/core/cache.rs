@@ -42,8 +42,6 @@ pub trait Blend: Sized {
     fn zero() -> Self;
     /// self += w · v.
     fn add_scaled(&mut self, v: &Self, w: f64);
-    /// self /= d.
-    fn divide(&mut self, d: f64);
 }
 
 impl Blend for f64 {
@@ -52,9 +50,6 @@ impl Blend for f64 {
     }
     fn add_scaled(&mut self, v: &Self, w: f64) {
         *self += w * v;
-    }
-    fn divide(&mut self, d: f64) {
-        *self /= d;
     }
 }
 
@@ -65,9 +60,6 @@ impl Blend for Rgb {
     fn add_scaled(&mut self, v: &Self, w: f64) {
         *self += *v * w;
     }
-    fn divide(&mut self, d: f64) {
-        *self /= d;
-    }
 }
 
 impl<T: Blend, const N: usize> Blend for [T; N] {
@@ -76,9 +68,6 @@ impl<T: Blend, const N: usize> Blend for [T; N] {
     }
     fn add_scaled(&mut self, v: &Self, w: f64) {
         self.iter_mut().zip(v).for_each(|(a, b)| a.add_scaled(b, w));
-    }
-    fn divide(&mut self, d: f64) {
-        self.iter_mut().for_each(|a| a.divide(d));
     }
 }
 
@@ -229,14 +218,7 @@ impl<S: Space, V> Cache<S, V> {
 
     /// Some record covers y.
     pub fn is_covered(&self, y: S::Vec) -> bool {
-        let mut covered = false;
-        self.index.for_candidates(to_array::<S>(y), S::DIM, |id| {
-            covered = covered
-                || self.records[id as usize]
-                    .extent
-                    .contains(self.records[id as usize].position, y);
-        });
-        covered
+        self.is_covered_where(y, |_| true)
     }
 
     /// Some record whose position passes `keep` covers y (`keep` is called only
@@ -306,17 +288,16 @@ impl<S: Space, V: Interpolant<S>> Cache<S, V> {
         keep: impl FnMut(S::Vec) -> bool,
     ) -> Option<V::Out> {
         self.covering_where(y, scratch, keep);
+        let total: f64 = scratch.iter().map(|&(_, w)| w).sum();
+        if total <= 0.0 {
+            return None;
+        }
         let mut out = V::Out::zero();
-        let mut total = 0.0;
         for &(i, w) in scratch.iter() {
             let r = &self.records[i];
-            out.add_scaled(&r.value.extrapolated(y - r.position, second_order), w);
-            total += w;
+            out.add_scaled(&r.value.extrapolated(y - r.position, second_order), w / total);
         }
-        (total > 0.0).then(|| {
-            out.divide(total);
-            out
-        })
+        Some(out)
     }
 }
 

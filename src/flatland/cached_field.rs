@@ -20,12 +20,12 @@ use super::derivatives::{self, AwareSettings, PartDerivs};
 use super::field::{Field, FieldParams};
 use super::lights::{Lobe, direct_lights};
 use super::probe::{ProbeSettings, capture};
-use super::proxy::{self, Element};
+use super::proxy;
 use super::scene::Scene;
 use super::scene_desc::Part;
 use crate::core::cache::{Cache, Record};
 use crate::core::color::{Rgb, luminance};
-use crate::core::metric::{MetricParams, hessian_radiance_floor};
+use crate::core::metric::{MetricParams, with_radiance_floor};
 use crate::core::rng::mix64;
 use crate::core::space::D2;
 use crate::core::taylor_rgb::TaylorRgb;
@@ -149,18 +149,6 @@ fn compute_record(
         metric_hessians,
         rays: lf.cost_rays,
     })
-}
-
-/// Elements with the metric's radiance floor added (metric Hessian only).
-fn with_radiance_floor(elements: &[Element], fraction: f64) -> Vec<Element> {
-    let floor = hessian_radiance_floor(elements.iter().map(|e| e.radiance), fraction).unwrap_or(Rgb::ZERO);
-    elements
-        .iter()
-        .map(|e| Element {
-            radiance: e.radiance + floor,
-            ..*e
-        })
-        .collect()
 }
 
 fn info(r: &Record<D2, Payload>) -> RecordInfo {

@@ -56,6 +56,12 @@ pub struct Element {
     pub bridging: bool,
 }
 
+impl crate::core::metric::Radiant for Element {
+    fn radiance_mut(&mut self) -> &mut Rgb {
+        &mut self.radiance
+    }
+}
+
 /// Vertices whose depths differ by more than this fraction bridge a discontinuity.
 const BRIDGE_RATIO: f64 = 0.1;
 

@@ -32,13 +32,13 @@
 use super::camera_march::{CameraRay, QueryKey};
 use super::derivatives::{AwareSettings, aware, plain_estimate, unaware};
 use super::probe::{Outgoing, ProbeSettings, capture_towards};
-use super::proxy::{self, Element};
+use super::proxy;
 pub use super::reconstruct::{Reconstruction, march_reference, reconstruct};
 use super::render::{RenderParams, camera};
 use super::scene::Scene;
 use crate::core::cache::{Cache, Record, placement_order};
-use crate::core::color::{Rgb, luminance};
-use crate::core::metric::{CacheMethod, MetricParams, hessian_radiance_floor};
+use crate::core::color::luminance;
+use crate::core::metric::{CacheMethod, MetricParams, with_radiance_floor};
 use crate::core::rng::mix64;
 use crate::core::space::D3;
 use crate::core::taylor_rgb::TaylorRgb;
@@ -187,18 +187,6 @@ pub(crate) fn sees(scene: &Scene, x: DVec3, y: DVec3, rays: &mut u64) -> bool {
     }
     *rays += 1;
     !scene.occluded(x, d / len, len, None)
-}
-
-/// Elements with the metric's radiance floor added (metric Hessian only).
-fn with_radiance_floor(elements: &[Element], fraction: f64) -> Vec<Element> {
-    let floor = hessian_radiance_floor(elements.iter().map(|e| e.radiance), fraction).unwrap_or(Rgb::ZERO);
-    elements
-        .iter()
-        .map(|e| Element {
-            radiance: e.radiance + floor,
-            ..*e
-        })
-        .collect()
 }
 
 /// The light field at query point `y` and what the method derives from it.

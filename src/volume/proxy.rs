@@ -41,6 +41,12 @@ pub struct Element {
     pub dir_solid_angle: f64,
 }
 
+impl crate::core::metric::Radiant for Element {
+    fn radiance_mut(&mut self) -> &mut Rgb {
+        &mut self.radiance
+    }
+}
+
 impl Element {
     /// Longest edge.
     pub fn size(&self) -> f64 {
