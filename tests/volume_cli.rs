@@ -8,6 +8,14 @@ fn volcache() -> Command {
     Command::new(env!("CARGO_BIN_EXE_volcache"))
 }
 
+/// Runs `cmd`, asserts that it fails and returns its error output.
+fn failure(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{cmd:?} succeeded: {err}");
+    err
+}
+
 #[test]
 fn render3d_writes_exr_png_and_json() {
     let dir = tempfile::tempdir().unwrap();
@@ -179,50 +187,27 @@ fn tiles_sharing_records_merge_into_the_full_render() {
     assert_eq!(json["cache"]["uncovered"], 0);
     assert!(json["cache"]["placement_seconds"].as_f64().unwrap() > 0.0);
     // Two tiles are not the image; the same tile twice covers rows twice.
-    let out = volcache()
-        .arg("merge3d")
-        .args(&tiles[..2])
-        .args(["--out", &path("bad")])
-        .output()
-        .unwrap();
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("exactly once"));
-    // Records placed for 24x18 cannot serve a 24x20 render.
-    let out = volcache()
-        .args(base)
-        .args([
-            "--res",
-            "24x20",
-            "--records-in",
-            &path("records.json"),
-            "--out",
-            &path("bad"),
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success() && err.contains("records.json") && err.contains("24x20"),
-        "{err}"
+    let err = failure(
+        volcache()
+            .arg("merge3d")
+            .args(&tiles[..2])
+            .args(["--out", &path("bad")]),
     );
+    assert!(err.contains("exactly once"), "{err}");
+    // Records placed for 24x18 cannot serve a 24x20 render.
+    let with_records = |res: &str, records: &str| {
+        failure(
+            volcache()
+                .args(base)
+                .args(["--res", res, "--records-in", &path(records), "--out", &path("bad")]),
+        )
+    };
+    let err = with_records("24x20", "records.json");
+    assert!(err.contains("records.json") && err.contains("24x20"), "{err}");
     // A damaged records file names itself and the JSON path.
     std::fs::write(d.join("broken.json"), "{\"format\": 3}").unwrap();
-    let out = volcache()
-        .args(base)
-        .args([
-            "--res",
-            "24x18",
-            "--records-in",
-            &path("broken.json"),
-            "--out",
-            &path("bad"),
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success() && err.contains("broken.json") && err.contains("format"),
-        "{err}"
-    );
+    let err = with_records("24x18", "broken.json");
+    assert!(err.contains("broken.json") && err.contains("format"), "{err}");
     assert!(!d.join("bad").exists());
 }
 
@@ -255,5 +240,84 @@ fn interrupt_writes_nothing() {
         assert!(killed.success());
         assert_eq!(child.wait().unwrap().code(), Some(130), "{method}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "{method}");
+    }
+}
+
+/// `figure compare3d` and `bench tradeoff3d` on a tiny fog box: every output is
+/// written, the numbers are finite, the second command reuses the first's reference
+/// from disk, and the sweep has one run per count and per sample count.
+#[test]
+fn compare3d_and_tradeoff3d_write_their_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let common = [
+        "scenes3d/fog_box.json",
+        "--res",
+        "24x18",
+        "--spp",
+        "1",
+        "--ref-spp",
+        "32",
+        "--rays",
+        "256",
+        "--steps",
+        "4",
+        "--quiet",
+    ];
+    let run = |args: &[&str]| {
+        let out = volcache()
+            .args(args)
+            .args(common)
+            .arg("--ref-cache")
+            .arg(d.join("ref"))
+            .arg("--out")
+            .arg(d)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    };
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join(name)).unwrap()).unwrap()
+    };
+    let finite = |v: &serde_json::Value| v.as_f64().is_some_and(f64::is_finite);
+
+    run(&["figure", "compare3d", "--caches", "8"]);
+    for f in [
+        "compare3d_fog_box.png",
+        "fog_box_ours.exr",
+        "fog_box_jarosz08.exr",
+        "fog_box_pt.exr",
+    ] {
+        assert!(d.join(f).is_file(), "{f}");
+    }
+    let c = read("compare3d_fog_box.json");
+    assert_eq!(c["reference"]["from_disk"], false);
+    let methods: Vec<&str> = c["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(methods, ["ours", "jarosz08", "pt"]);
+    for r in c["runs"].as_array().unwrap() {
+        assert!(
+            finite(&r["errors"]["rmse"]) && finite(&r["medium_errors"]["rmse"]),
+            "{r}"
+        );
+    }
+
+    run(&["bench", "tradeoff3d", "--counts", "4,8", "--spps", "1,4"]);
+    assert!(d.join("tradeoff3d_fog_box.png").is_file());
+    let t = read("tradeoff3d_fog_box.json");
+    assert_eq!(t["reference"]["from_disk"], true, "the reference is reused");
+    let runs = t["runs"].as_array().unwrap();
+    let count = |m: &str| runs.iter().filter(|r| r["method"] == m).count();
+    assert_eq!((count("ours"), count("jarosz08"), count("pt")), (2, 2, 2));
+    assert!(
+        runs.iter()
+            .all(|r| finite(&r["seconds"]) && finite(&r["medium_errors"]["rmse"]))
+    );
+    for s in t["speedups"].as_array().unwrap() {
+        assert!(finite(&s["speedup"]) && s["speedup"].as_f64().unwrap() > 0.0, "{s}");
     }
 }
