@@ -18,6 +18,7 @@ pub mod core;
 pub mod figure;
 pub mod flatland;
 pub mod output;
+pub mod pipeline;
 pub mod progress;
 pub mod scene_check;
 pub mod volume;

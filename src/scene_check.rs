@@ -1,7 +1,31 @@
 //! The checks shared by the 2D and 3D scene validators: every problem names the
 //! JSON path of its field and what is wrong.
 
-use crate::flatland::scene_desc::Color;
+use crate::core::color::Color;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{file}: cannot read the scene: {message}")]
+    Io { file: String, message: String },
+    #[error("{file}: {}", format_problems(.problems))]
+    Invalid { file: String, problems: Vec<Problem> },
+}
+
+fn format_problems(p: &[Problem]) -> String {
+    p.iter()
+        .map(|p| format!("{}: {}", p.path, p.message))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+impl SceneError {
+    pub fn problems(&self) -> &[Problem] {
+        match self {
+            SceneError::Invalid { problems, .. } => problems,
+            SceneError::Io { .. } => &[],
+        }
+    }
+}
 
 /// One problem with a scene: the JSON path of the field and what is wrong.
 #[derive(Clone, Debug, PartialEq)]

@@ -2,9 +2,7 @@
 //! claims at equal cache count and equal cost.
 
 use glam::DVec2;
-use volcache::flatland::cached_field::{
-    CacheMethod, CacheSettings, CachedField, RecordMemo, render_cached, render_with_count,
-};
+use volcache::flatland::cached_field::{CacheMethod, CacheSettings, CachedField, RecordMemo, render_cached};
 use volcache::flatland::field::{Field, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
 use volcache::progress::Progress;
@@ -20,7 +18,7 @@ fn params(scene: &Scene, w: usize, h: usize) -> FieldParams {
 }
 
 fn settings(method: CacheMethod, seed: u64) -> CacheSettings {
-    let mut cs = CacheSettings::new(method, 0.05);
+    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, 0.05);
     cs.probe.rays = 512;
     cs.probe.steps = 8;
     cs.seed = seed;
@@ -42,16 +40,15 @@ fn reference(scene: &Scene, fp: &FieldParams, spp: u32) -> Field {
 }
 
 fn at_count(scene: &Scene, fp: &FieldParams, method: CacheMethod, seed: u64, k: usize) -> CachedField {
-    render_with_count(
+    render_cached(
         scene,
         fp,
         &settings(method, seed),
-        k,
+        Some(k),
         &mut RecordMemo::new(),
         &Progress::new(),
     )
     .unwrap()
-    .0
 }
 
 #[test]
@@ -66,7 +63,9 @@ fn every_pixel_is_covered_and_results_do_not_depend_on_threads() {
             };
             let run = |threads| {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-                pool.install(|| render_cached(&scene, &fp, &cs, &mut RecordMemo::new(), &Progress::new()).unwrap())
+                pool.install(|| {
+                    render_cached(&scene, &fp, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap()
+                })
             };
             let (a, b) = (run(1), run(2));
             assert_eq!(a.uncovered_pixels, 0, "{method:?} per_part={per_part}: holes");

@@ -6,18 +6,20 @@ use std::f64::consts::TAU;
 use volcache::core::element::segment_form_factor;
 use volcache::core::space::D2;
 use volcache::core::taylor::Taylor2;
-use volcache::flatland::derivatives::{self, AwareSettings, PartDerivs, ReferenceSettings};
-use volcache::flatland::probe::{ProbeSettings, capture};
-use volcache::flatland::proxy;
+use volcache::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
+use volcache::pipeline::probe::{Outgoing, ProbeSettings, capture};
+use volcache::pipeline::proxy;
+
+type PartDerivs = derivatives::PartDerivs<D2>;
 use volcache::flatland::scene::Scene;
 use volcache::progress::Progress;
 
 fn aware_at(scene: &Scene, x: DVec2, rays: usize, seed: u64) -> PartDerivs {
     let ps = ProbeSettings {
         rays,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D2>()
     };
-    let lf = capture(scene, x, DVec2::X, &ps, seed, 0, &Progress::new()).unwrap();
+    let lf = capture(scene, x, Outgoing::Direction(DVec2::X), &ps, seed, 0, &Progress::new()).unwrap();
     let aw = AwareSettings::default();
     derivatives::aware(&lf, &proxy::build(&lf, aw.rule), &aw)
 }
@@ -25,9 +27,9 @@ fn aware_at(scene: &Scene, x: DVec2, rays: usize, seed: u64) -> PartDerivs {
 fn unaware_at(scene: &Scene, x: DVec2, rays: usize, seed: u64) -> PartDerivs {
     let ps = ProbeSettings {
         rays,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D2>()
     };
-    let lf = capture(scene, x, DVec2::X, &ps, seed, 0, &Progress::new()).unwrap();
+    let lf = capture(scene, x, Outgoing::Direction(DVec2::X), &ps, seed, 0, &Progress::new()).unwrap();
     derivatives::unaware(&lf)
 }
 
@@ -135,7 +137,8 @@ fn aware_beats_unaware_near_occlusion_boundaries() {
         let scene = Scene::load(std::path::Path::new(path)).unwrap();
         for (x, y) in points {
             let x = DVec2::new(x, y);
-            let reference = derivatives::reference(&scene, x, DVec2::X, &rs, &Default::default(), 11).parts;
+            let reference =
+                derivatives::reference_at(&scene, x, Outgoing::Direction(DVec2::X), &rs, &Default::default(), 11).parts;
             let (aw, un) = (aware_at(&scene, x, 4096, 5), unaware_at(&scene, x, 4096, 5));
             let (r, a, u) = (
                 reference.single.luminance(),
@@ -186,10 +189,11 @@ fn aware_error_shrinks_with_more_rays() {
         points
             .iter()
             .map(|&x| {
-                let r = derivatives::reference(&scene, x, DVec2::X, &rs, &Default::default(), 2)
-                    .parts
-                    .single
-                    .luminance();
+                let r =
+                    derivatives::reference_at(&scene, x, Outgoing::Direction(DVec2::X), &rs, &Default::default(), 2)
+                        .parts
+                        .single
+                        .luminance();
                 let errs: f64 = (0..4)
                     .map(|seed| {
                         let a = aware_at(&scene, x, rays, seed).single.luminance();
@@ -262,64 +266,4 @@ fn derivatives_are_finite_at_extremes() {
             assert!(a.is_finite() && u.is_finite(), "g={g} σ={sig} x={x}: {a:?}");
         }
     }
-}
-
-/// Anisotropic media: the circular-harmonic moments (theory.md §1) reproduce the
-/// per-element phase evaluation, value, gradient and Hessian, for any ω_o; an
-/// isotropic medium uses only the zeroth moment.
-#[test]
-fn harmonic_moments_reproduce_the_anisotropic_phase() {
-    let text = std::fs::read_to_string("flatland_scenes/occluder.json")
-        .unwrap()
-        .replace(r#""g": 0.0"#, r#""g": 0.5"#);
-    let scene = Scene::from_json(&text, "occluder g=0.5").unwrap();
-    let x = DVec2::new(0.45, 0.0);
-    let aw = AwareSettings::default();
-    for angle in [0.0f64, 1.0, 2.5, -2.0] {
-        let omega_o = DVec2::from_angle(angle);
-        let ps = ProbeSettings {
-            rays: 1024,
-            ..Default::default()
-        };
-        let lf = capture(&scene, x, omega_o, &ps, 3, 0, &Progress::new()).unwrap();
-        let elements = proxy::build(&lf, aw.rule);
-        let direct = derivatives::aware(&lf, &elements, &aw);
-        let moments = derivatives::aware_moments(&lf, &elements, &aw, 60);
-        let (single, multiple) = moments.in_scattered(omega_o);
-        for (a, b) in [
-            (single.luminance(), direct.single.luminance()),
-            (multiple.luminance(), direct.multiple.luminance()),
-        ] {
-            // Agreement up to the two softenings near elements (relative ε²/r²).
-            assert!(
-                (a.value - b.value).abs() < 1e-4 * b.value.abs(),
-                "ω_o {angle}: {} vs {}",
-                a.value,
-                b.value
-            );
-            assert!(
-                (a.grad - b.grad).length() < 1e-3 * b.grad.length().max(1e-12),
-                "{} vs {}",
-                a.grad,
-                b.grad
-            );
-            assert!(frobenius(a.hess - b.hess) < 1e-2 * frobenius(b.hess).max(1e-12));
-        }
-    }
-    let iso = Scene::load(std::path::Path::new("flatland_scenes/occluder.json")).unwrap();
-    let lf = capture(
-        &iso,
-        x,
-        DVec2::X,
-        &ProbeSettings {
-            rays: 256,
-            ..Default::default()
-        },
-        3,
-        0,
-        &Progress::new(),
-    )
-    .unwrap();
-    let m = derivatives::aware_moments(&lf, &proxy::build(&lf, aw.rule), &aw, 60);
-    assert_eq!(m.single.len(), 1, "isotropic media keep only M_0");
 }

@@ -3,7 +3,7 @@
 
 use glam::DVec2;
 use volcache::flatland::scene::Scene;
-use volcache::flatland::transport::{Query, Settings, estimate};
+use volcache::pipeline::path::{Query, Settings, estimate};
 
 fn point_source(c: f64) -> Scene {
     let json = format!(

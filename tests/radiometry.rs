@@ -5,7 +5,7 @@ use std::f64::consts::TAU;
 use volcache::core::phase::Hg2;
 use volcache::flatland::field::{FieldParams, render_field};
 use volcache::flatland::scene::Scene;
-use volcache::flatland::transport::{Query, Settings, estimate, estimate_radiance};
+use volcache::pipeline::path::{Query, Settings, estimate, estimate_radiance};
 use volcache::progress::Progress;
 
 fn scene(json: &str) -> Scene {

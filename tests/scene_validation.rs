@@ -140,7 +140,7 @@ fn shipped_scenes_load_and_round_trip() {
     assert!(n >= 6, "expected the shipped scenes, found {n}");
     let forest = Scene::load(std::path::Path::new("flatland_scenes/forest.json")).unwrap();
     assert!(forest.geometry.len() >= 200);
-    assert_eq!(forest.geometry.accel(), volcache::flatland::geometry::Accel::Bvh);
+    assert_eq!(forest.geometry.accel(), volcache::pipeline::bvh::Accel::Bvh);
 }
 
 #[test]

@@ -5,7 +5,8 @@
 use glam::DVec3;
 use std::path::Path;
 use volcache::core::rng::Sampler;
-use volcache::volume::bvh::Bvh;
+use volcache::core::space::D3;
+use volcache::pipeline::bvh::{Accel, Geometry};
 use volcache::volume::mesh::{Hit, Triangle};
 use volcache::volume::render::ray_cast_rate;
 use volcache::volume::scene::Scene;
@@ -22,7 +23,12 @@ fn brute_force(tris: &[Triangle], o: DVec3, d: DVec3, t_min: f64, t_max: f64) ->
     for (i, t) in tris.iter().enumerate() {
         let far = best.map_or(t_max, |b| b.t);
         if let Some((t, u, v)) = t.intersect(o, d, t_min, far) {
-            best = Some(Hit { t, tri: i as u32, u, v });
+            best = Some(Hit {
+                t,
+                prim: i as u32,
+                u,
+                v,
+            });
         }
     }
     best
@@ -30,7 +36,7 @@ fn brute_force(tris: &[Triangle], o: DVec3, d: DVec3, t_min: f64, t_max: f64) ->
 
 /// Same distance (bit for bit) and same triangle unless two triangles tie.
 fn compare(tris: &[Triangle], rays: usize, lo: DVec3, hi: DVec3, seed: u64) -> usize {
-    let bvh = Bvh::build(tris);
+    let bvh = Geometry::<D3, Triangle>::with_accel(tris.to_vec(), Accel::Bvh);
     let mut s = Sampler::new(seed, 0);
     let mut hits = 0;
     for k in 0..rays {
@@ -41,7 +47,9 @@ fn compare(tris: &[Triangle], rays: usize, lo: DVec3, hi: DVec3, seed: u64) -> u
         } else {
             f64::INFINITY
         };
-        let a = bvh.closest_hit(tris, o, d, 1e-9, t_max, None);
+        let a = bvh
+            .closest_hit(o, d, 1e-9, t_max, None)
+            .map(|(t, prim, u, v)| Hit { t, prim, u, v });
         let b = brute_force(tris, o, d, 1e-9, t_max);
         match (a, b) {
             (None, None) => {}
@@ -51,17 +59,17 @@ fn compare(tris: &[Triangle], rays: usize, lo: DVec3, hi: DVec3, seed: u64) -> u
             }
             _ => panic!("ray {k} from {o} along {d}: BVH {a:?}, brute force {b:?}"),
         }
-        assert_eq!(bvh.occluded(tris, o, d, 1e-9, t_max, None), b.is_some(), "ray {k}");
+        assert_eq!(bvh.occluded(o, d, 1e-9, t_max, None), b.is_some(), "ray {k}");
         // Skipping the hit triangle gives the next hit along the ray.
         if let Some(b) = b {
-            let next = bvh.closest_hit(tris, o, d, 1e-9, t_max, Some(b.tri));
+            let next = bvh.closest_hit(o, d, 1e-9, t_max, Some(b.prim));
             let others: Vec<Triangle> = tris
                 .iter()
                 .enumerate()
-                .filter(|(i, _)| *i as u32 != b.tri)
+                .filter(|(i, _)| *i as u32 != b.prim)
                 .map(|(_, t)| *t)
                 .collect();
-            assert_eq!(next.map(|h| h.t), brute_force(&others, o, d, 1e-9, t_max).map(|h| h.t));
+            assert_eq!(next.map(|h| h.0), brute_force(&others, o, d, 1e-9, t_max).map(|h| h.t));
         }
     }
     hits
@@ -86,12 +94,12 @@ fn bvh_matches_brute_force_on_a_random_soup() {
 fn bvh_matches_brute_force_on_the_shipped_scenes() {
     for name in ["fog_box", "staircase", "mesh_in_fog"] {
         let scene = Scene::load(Path::new(&format!("scenes3d/{name}.json"))).unwrap();
-        let hits = compare(&scene.triangles, 3000, scene.bounds.min, scene.bounds.max, 9);
+        let hits = compare(&scene.geometry.prims, 3000, scene.bounds.min, scene.bounds.max, 9);
         assert!(hits > 500, "{name}: only {hits} hits");
         let rate = ray_cast_rate(&scene, 200_000, 1);
         eprintln!(
             "{name}: {} triangles, {:.2} M closest-hit rays/s on {} threads",
-            scene.triangles.len(),
+            scene.geometry.len(),
             rate / 1e6,
             rayon::current_num_threads()
         );

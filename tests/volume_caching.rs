@@ -8,7 +8,7 @@ use volcache::core::metric::CacheMethod;
 use volcache::core::stats::ImageErrors;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CachedRenderParams, RecordMemo, march_reference, place, reconstruct, render_cached,
+    CacheSettings, CachedRenderParams, RecordMemo, default_eps, march_reference, place, reconstruct, render_cached,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
 use volcache::volume::render::render;
@@ -32,7 +32,7 @@ fn params(scene: &Scene, w: usize, h: usize, spp: u32, k: f64) -> CachedRenderPa
 }
 
 fn settings(method: CacheMethod, scene: &Scene, rays: usize, steps: usize, seed: u64) -> CacheSettings {
-    let mut cs = CacheSettings::new(method, CacheSettings::default_eps(method, scene));
+    let mut cs = CacheSettings::new::<volcache::core::space::D3>(method, default_eps(method, scene));
     cs.probe.rays = rays;
     cs.probe.steps = steps;
     cs.seed = seed;
@@ -77,7 +77,7 @@ fn ours_beats_jarosz08_at_equal_cache_count_on_the_staircase() {
             eprintln!(
                 "seed {seed} {method:?}: {} records (ε {:.3e}), {} query points, medium RMSE {:.4e} \
                  (without the reference's noise {own:.4e}; mean {:.4e}), placement {:.2} s, {} rays",
-                r.placement.cache.len(),
+                r.placement.record_count(),
                 r.placement.eps,
                 r.placement.query_points,
                 e.rmse,
@@ -87,7 +87,7 @@ fn ours_beats_jarosz08_at_equal_cache_count_on_the_staircase() {
             );
             assert_eq!(r.reconstruction.uncovered, 0);
             // Placement counts are chaotic in ε (core::equal_count): ±10%.
-            assert!((r.placement.cache.len() as f64 - 60.0).abs() <= 6.0);
+            assert!((r.placement.record_count() as f64 - 60.0).abs() <= 6.0);
             rmse[k] = own;
             sums[k] += own;
             assert!(e.rmse.powi(2) > 1.5 * noise2, "the reference is too noisy to judge");
@@ -167,22 +167,26 @@ fn deterministic_hole_free_and_records_round_trip() {
             pool.install(|| render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap())
         };
         let (a, b) = (run(1), run(2));
-        assert_eq!(a.placement.cache.records(), b.placement.cache.records(), "{method:?}");
+        assert_eq!(
+            a.placement.caches[0].records(),
+            b.placement.caches[0].records(),
+            "{method:?}"
+        );
         assert_eq!(
             a.reconstruction.image.values, b.reconstruction.image.values,
             "{method:?}"
         );
         assert_eq!(a.reconstruction.uncovered, 0);
         assert!(
-            a.placement.cache.len() > 5,
+            a.placement.record_count() > 5,
             "{method:?}: {} records",
-            a.placement.cache.len()
+            a.placement.record_count()
         );
         let file = RecordsFile::from_placement(&s, &p, method, &a.placement);
         let text = serde_json::to_string(&file).unwrap();
         let (back, cache) = RecordsFile::parse(&text, "records.json").unwrap();
         assert_eq!(back, file);
-        assert_eq!(cache.records(), a.placement.cache.records());
+        assert_eq!(cache.records(), a.placement.caches[0].records());
         assert_eq!(back.valid_for.mismatch(&ValidFor::of(&s, &p)), None);
         let second_order = false;
         let again = reconstruct(&s, &p, &cache, second_order, &Progress::new()).unwrap();
@@ -292,7 +296,7 @@ fn no_medium_no_cost() {
     let cs = settings(CacheMethod::Ours, &s, 256, 8, 1);
     let r = render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
     assert_eq!(
-        (r.placement.query_points, r.placement.cache.len(), r.placement.rays),
+        (r.placement.query_points, r.placement.record_count(), r.placement.rays),
         (0, 0, 0)
     );
     let img = &r.reconstruction.image;

@@ -8,13 +8,43 @@ use std::path::Path;
 use volcache::core::color::luminance;
 use volcache::core::space::D3;
 use volcache::core::taylor::Taylor2;
+use volcache::core::taylor_rgb::TaylorRgb;
 use volcache::core::triangle::triangle_form_factor;
+use volcache::pipeline::derivatives::{AwareSettings, aware, reference, unaware};
+use volcache::pipeline::probe::{Outgoing, ProbeSettings, capture};
+use volcache::pipeline::proxy::{RadianceRule, build};
+use volcache::pipeline::world::World;
 use volcache::progress::Progress;
-use volcache::volume::derivatives::{AwareSettings, aware, reference_gradient, reference_gradient_towards, unaware};
-use volcache::volume::probe::{LightField, Outgoing, ProbeSettings, capture, capture_towards};
-use volcache::volume::proxy::{RadianceRule, build};
+
+type LightField = volcache::pipeline::probe::LightField<D3>;
+
+/// Central differences of the path-traced L_s (all parts) with common random
+/// numbers: value and gradient.
+fn reference_gradient_towards(
+    s: &Scene,
+    x: DVec3,
+    out: Outgoing<DVec3>,
+    h: f64,
+    spp: u32,
+    settings: &Settings,
+    seed: u64,
+) -> TaylorRgb<D3> {
+    reference(s, x, out, h, spp, settings, seed, false).parts.total()
+}
+
+fn reference_gradient(
+    s: &Scene,
+    x: DVec3,
+    omega_o: DVec3,
+    h: f64,
+    spp: u32,
+    settings: &Settings,
+    seed: u64,
+) -> TaylorRgb<D3> {
+    reference_gradient_towards(s, x, Outgoing::Direction(omega_o), h, spp, settings, seed)
+}
+use volcache::pipeline::path::Settings;
 use volcache::volume::scene::Scene;
-use volcache::volume::transport::Settings;
 
 fn scene(json: &str) -> Scene {
     Scene::from_json(json, "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
@@ -49,7 +79,7 @@ fn closed_form(x: DVec3) -> Taylor2<D3> {
 }
 
 fn probe(scene: &Scene, x: DVec3, omega_o: DVec3, ps: &ProbeSettings, seed: u64) -> LightField {
-    capture(scene, x, omega_o, ps, seed, 0, &Progress::new()).expect("not cancelled")
+    capture(scene, x, Outgoing::Direction(omega_o), ps, seed, 0, &Progress::new()).expect("not cancelled")
 }
 
 fn norm(m: DMat3) -> f64 {
@@ -62,7 +92,7 @@ fn single_scattering_matches_the_closed_form_solid_angle() {
     let ps = ProbeSettings {
         rays: 16384,
         steps: 4,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D3>()
     };
     for (k, x) in [
         DVec3::new(0.2, 0.0, 0.1),
@@ -131,7 +161,7 @@ fn anisotropic_single_scattering_against_finite_differences() {
     let ps = ProbeSettings {
         rays: 16384,
         steps: 4,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D3>()
     };
     for x in [DVec3::new(0.2, 0.0, 0.1), DVec3::new(1.3, -0.2, 0.5)] {
         let lf = probe(&s, x, omega_o, &ps, 1);
@@ -169,13 +199,13 @@ fn towards_a_camera_the_turning_of_omega_o_is_differentiated() {
     let ps = ProbeSettings {
         rays: 16384,
         steps: 4,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D3>()
     };
     for (x, eye) in [
         (DVec3::new(0.2, 0.0, 0.1), DVec3::new(0.2, -0.9, 0.5)),
         (DVec3::new(0.9, -0.3, 0.4), DVec3::new(0.3, -1.0, 0.0)),
     ] {
-        let lf = capture_towards(&s, x, Outgoing::TowardsPoint(eye), &ps, 1, 0, &Progress::new()).unwrap();
+        let lf = capture(&s, x, Outgoing::TowardsPoint(eye), &ps, 1, 0, &Progress::new()).unwrap();
         let elements = build(&lf, RadianceRule::Farther);
         let turning = aware(&lf, &elements, &AwareSettings::default()).total().luminance();
         let mut fixed_lf = lf.clone();
@@ -220,7 +250,7 @@ fn finite_at_extremes() {
     let ps = ProbeSettings {
         rays: 1024,
         steps: 3,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D3>()
     };
     for x in [
         DVec3::new(0.0, 1.0 - 1e-9, 0.0), // just below the emitter
@@ -300,7 +330,7 @@ fn fog_box_penumbra(name: &str, s: &Scene) {
     let ps = ProbeSettings {
         rays: 16384,
         steps: 64,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D3>()
     };
     let settings = Settings::default();
     for (k, &x) in points.iter().enumerate() {
@@ -351,7 +381,7 @@ fn proxy_is_closed_and_capture_deterministic() {
     let ps = ProbeSettings {
         rays: 2048,
         steps: 8,
-        ..Default::default()
+        ..ProbeSettings::default_for::<D3>()
     };
     let x = DVec3::new(0.3, 0.6, 0.2);
     let lf = probe(&s, x, DVec3::Z, &ps, 4);
@@ -359,7 +389,7 @@ fn proxy_is_closed_and_capture_deterministic() {
     let mut sum = 0.0;
     for e in elements
         .iter()
-        .filter(|e| e.kind == volcache::volume::proxy::ElementKind::Surface)
+        .filter(|e| e.kind == volcache::pipeline::proxy::ElementKind::Surface)
     {
         let f = triangle_form_factor(e.v, x).value;
         assert!(f > 0.0);
@@ -369,5 +399,5 @@ fn proxy_is_closed_and_capture_deterministic() {
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let lf1 = one.install(|| probe(&s, x, DVec3::Z, &ps, 4));
     assert_eq!(lf.rays, lf1.rays);
-    assert_eq!(lf.triangles, lf1.triangles);
+    assert_eq!(lf.simplices, lf1.simplices);
 }

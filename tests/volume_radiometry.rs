@@ -7,10 +7,10 @@ use std::f64::consts::PI;
 use std::path::Path;
 use volcache::core::color::Rgb;
 use volcache::core::phase::Hg3;
+use volcache::pipeline::path::{Query, Settings, estimate_with as estimate, radiance_path, sample_query};
 use volcache::progress::Progress;
 use volcache::volume::render::{RenderParams, render};
 use volcache::volume::scene::Scene;
-use volcache::volume::transport::{Settings, estimate, radiance_path, sample_irradiance};
 
 fn scene(json: &str) -> Scene {
     Scene::from_json(json, "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
@@ -62,7 +62,8 @@ fn point_light_on_a_diffuse_quad_is_exact() {
             &Settings::default(),
             &mut smp,
             &mut rays,
-        );
+        )
+        .0;
         assert!(
             (l - want).abs().max_element() < 1e-12 * want.max_element(),
             "{l} vs {want}"
@@ -100,7 +101,7 @@ fn furnace() {
     let mut rays = 0;
     let est = estimate(160_000, 3, 0, |smp| {
         let w = DVec3::new(smp.next_f64() - 0.5, smp.next_f64() - 0.5, smp.next_f64() - 0.5).normalize();
-        radiance_path(&s, x, w, None, None, &settings, smp, &mut rays)
+        radiance_path(&s, x, w, None, None, &settings, smp, &mut rays).0
     });
     check("furnace", est, Rgb::new(0.4 / 0.4, 0.5 / 0.5, 0.7 / 0.7));
 }
@@ -144,7 +145,7 @@ fn single_scattering_matches_quadrature() {
     };
     let mut rays = 0;
     let est = estimate(200_000, 5, 0, |smp| {
-        radiance_path(&s, o, d, None, None, &settings, smp, &mut rays)
+        radiance_path(&s, o, d, None, None, &settings, smp, &mut rays).0
     });
     check("single scattering", est, Rgb::splat(want));
 }
@@ -165,7 +166,9 @@ fn boundary_flux(albedo: f64, zmin: f64, sensor_z: f64, normal_z: f64, n: u64) -
     };
     let (x, nrm) = (DVec3::new(0.0, 0.0, sensor_z), DVec3::new(0.0, 0.0, normal_z));
     let mut rays = 0;
-    estimate(n, 11, 0, |smp| sample_irradiance(&s, x, nrm, &settings, smp, &mut rays))
+    estimate(n, 11, 0, |smp| {
+        sample_query(&s, x, &Query::Irradiance { normal: nrm }, &settings, smp, &mut rays).total()
+    })
 }
 
 #[test]
@@ -242,6 +245,7 @@ fn sky_and_sun_cone_light_a_floor() {
             smp,
             &mut rays,
         )
+        .0
     });
     check("sky + sun cone on a floor", est, want);
 }
@@ -263,7 +267,15 @@ fn area_light_irradiance_matches_the_form_factor() {
     let want = Rgb::new(2.0, 1.0, 0.5) * (PI * f);
     let mut rays = 0;
     let est = estimate(40_000, 17, 0, |smp| {
-        sample_irradiance(&s, DVec3::ZERO, DVec3::Y, &Settings::default(), smp, &mut rays)
+        sample_query(
+            &s,
+            DVec3::ZERO,
+            &Query::Irradiance { normal: DVec3::Y },
+            &Settings::default(),
+            smp,
+            &mut rays,
+        )
+        .total()
     });
     check("area light irradiance", est, want);
 }

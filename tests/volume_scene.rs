@@ -20,15 +20,15 @@ fn shipped_scenes_load_and_round_trip() {
     for name in ["fog_box", "staircase", "mesh_in_fog"] {
         let path = format!("scenes3d/{name}.json");
         let s = Scene::load(Path::new(&path)).unwrap_or_else(|e| panic!("{e}"));
-        assert!(!s.triangles.is_empty() && s.medium.is_some(), "{name}");
+        assert!(!s.geometry.is_empty() && s.medium.is_some(), "{name}");
         let text = serde_json::to_string(&s.desc).unwrap();
         let back: SceneDesc = serde_json::from_str(&text).unwrap();
         assert_eq!(back, s.desc, "{name}");
     }
     let mesh = Scene::load(Path::new("scenes3d/mesh_in_fog.json")).unwrap();
-    assert_eq!(mesh.triangles.len(), 2 + 2 + 80);
+    assert_eq!(mesh.geometry.len(), 2 + 2 + 80);
     let fog = Scene::load(Path::new("scenes3d/fog_box.json")).unwrap();
-    assert_eq!(fog.emitters.len(), 2);
+    assert_eq!(fog.emitters.prims.len(), 2);
 }
 
 #[test]

@@ -11,6 +11,7 @@ use super::view::{Xform, zoom_about};
 use super::workbench::{DragKind, DragState, Workbench};
 use crate::core::metric::MetricParams;
 use crate::figure::{ColorScale, FieldStyle, field_to_rgba, viridis};
+use crate::pipeline::world::World;
 use eframe::egui::{self, Align2, Color32, FontId, Mesh, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 use std::sync::Arc;
 

@@ -8,9 +8,7 @@
 
 use super::command::shell_quote;
 use super::jobs::{Job, Notify, Priority, Reporter};
-use crate::flatland::cached_field::{
-    CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached, render_with_count,
-};
+use crate::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached};
 use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use crate::flatland::scene::Scene;
 use std::sync::Arc;
@@ -62,7 +60,7 @@ impl CompareParams {
     /// The cache settings of `method` (as `volcache caches`' defaults with these
     /// rays, steps and seed).
     pub fn cache_settings(&self, method: CacheMethod, seed: u64) -> CacheSettings {
-        let mut cs = CacheSettings::new(method, 0.05);
+        let mut cs = CacheSettings::new::<crate::core::space::D2>(method, 0.05);
         cs.probe.rays = self.rays.max(3);
         cs.probe.steps = self.steps.max(1);
         cs.seed = seed;
@@ -171,12 +169,12 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
                 let name = method_label(method);
                 r.stage(format!("compare: {name}, searching ε for {target} records"));
                 let mut memo = RecordMemo::new();
-                let (_, eps) = render_with_count(&scene, &fp, &cs, target, &mut memo, r.progress())?;
+                let eps = render_cached(&scene, &fp, &cs, Some(target), &mut memo, r.progress())?.eps;
                 r.add_rays(memo.values().map(|d| d.rays).sum());
                 r.stage(format!("compare: {name}, timed run at ε = {eps:.3e}"));
                 let start = std::time::Instant::now();
                 let cs = CacheSettings { eps, ..cs };
-                let f = render_cached(&scene, &fp, &cs, &mut RecordMemo::new(), r.progress())?;
+                let f = render_cached(&scene, &fp, &cs, None, &mut RecordMemo::new(), r.progress())?;
                 let seconds = start.elapsed().as_secs_f64();
                 let rays = f.placement_rays + f.reconstruction_rays;
                 r.add_rays(rays);

@@ -7,12 +7,18 @@
 use super::jobs::{Job, Notify, Priority, Reporter};
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::mix64;
-use crate::flatland::derivatives::{self, AwareSettings, PartDerivs, ReferenceSettings};
+use crate::core::space::D2;
 use crate::flatland::field::{FieldParams, RenderedField, render_field};
-use crate::flatland::probe::{LightField, ProbeSettings, capture};
-use crate::flatland::proxy::{self, Element};
 use crate::flatland::scene::Scene;
-use crate::flatland::transport::Settings;
+use crate::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
+use crate::pipeline::path::Settings;
+use crate::pipeline::probe::{Outgoing, ProbeSettings, capture};
+use crate::pipeline::proxy;
+use crate::pipeline::world::World;
+
+type PartDerivs = derivatives::PartDerivs<D2>;
+type LightField = crate::pipeline::probe::LightField<D2>;
+type Element = crate::pipeline::proxy::Element<D2>;
 use crate::progress::Cancelled;
 use glam::DVec2;
 use std::sync::Arc;
@@ -59,7 +65,7 @@ impl MethodParams {
             paths: self.paths.max(1),
             steps: self.steps.max(1),
             settings,
-            ..Default::default()
+            ..ProbeSettings::default_for::<D2>()
         }
     }
 }
@@ -186,7 +192,7 @@ pub fn spawn_probe(
             r.stage(format!("probe: light field, {} rays", ps.rays));
             r.progress().start(1);
             let start = std::time::Instant::now();
-            let lf = capture(&scene, x, omega_o, &ps, seed, 0, r.progress())?;
+            let lf = capture(&*scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, r.progress())?;
             r.add_rays(lf.cost_rays);
             let aw = AwareSettings::default();
             let elements = proxy::build(&lf, aw.rule);
@@ -273,7 +279,14 @@ pub fn spawn_reference(
             };
             for k in 0..n {
                 r.progress().check()?;
-                let d = derivatives::reference(&scene, x, omega_o, &rs, &settings, mix64(seed ^ (k as u64 + 1)));
+                let d = derivatives::reference_at(
+                    &*scene,
+                    x,
+                    Outgoing::Direction(omega_o),
+                    &rs,
+                    &settings,
+                    mix64(seed ^ (k as u64 + 1)),
+                );
                 r.add_rays(d.rays);
                 res.rays += d.rays;
                 res.batches.push(d.parts);
@@ -345,7 +358,15 @@ pub fn spawn_gradients(
                     unaware: None,
                 };
                 if scene.medium_at(x).is_some() {
-                    let lf = capture(&scene, x, omega_o, &ps, grid_seed(seed, k), 0, r.progress())?;
+                    let lf = capture(
+                        &*scene,
+                        x,
+                        Outgoing::Direction(omega_o),
+                        &ps,
+                        grid_seed(seed, k),
+                        0,
+                        r.progress(),
+                    )?;
                     r.add_rays(lf.cost_rays);
                     p.aware = Some(derivatives::aware(&lf, &proxy::build(&lf, aw.rule), &aw));
                     p.unaware = Some(derivatives::unaware(&lf));

@@ -8,7 +8,7 @@ use super::compute::ProbeResult;
 use super::overlay::method_color;
 use super::readout::{MethodReadout, StdErrors, bin_angle, polar_bins};
 use super::workbench::Workbench;
-use crate::flatland::direct::DirectLight;
+use crate::pipeline::world::DirectLight;
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, RichText, Sense, Shape, Stroke, Vec2, pos2, vec2};
 use glam::DVec2;
 
@@ -232,7 +232,7 @@ fn polar_plot(ui: &mut egui::Ui, p: &ProbeResult) {
     for l in &p.light_field.direct_lights {
         let from = match l {
             DirectLight::Point { position, .. } => *position - p.light_field.x,
-            DirectLight::Collimated { direction, .. } => -*direction,
+            DirectLight::Directional { to_light, .. } => *to_light,
         };
         let d = dir(from.y.atan2(from.x));
         painter.extend(Shape::dashed_line(

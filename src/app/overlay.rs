@@ -11,8 +11,8 @@ use crate::figure::{
 };
 use crate::flatland::cached_field::RecordInfo;
 use crate::flatland::field::Field;
-use crate::flatland::proxy::ElementKind;
 use crate::flatland::scene_desc::Part;
+use crate::pipeline::proxy::ElementKind;
 use eframe::egui::{Color32, ColorImage, Painter, Pos2, Rect, Shape, Stroke, Vec2, vec2};
 use glam::DVec2;
 
@@ -261,7 +261,7 @@ pub fn ray_shapes(p: &ProbeResult, xf: &Xform, max: usize) -> Vec<Shape> {
 /// which are drawn red (surface pieces bold, medium shell pieces faint). Ordinary
 /// medium shells are not drawn: thousands of arcs would hide the rest.
 pub fn element_shapes(p: &ProbeResult, xf: &Xform, max_points: usize) -> Vec<Shape> {
-    let surface: Vec<&crate::flatland::proxy::Element> =
+    let surface: Vec<&crate::pipeline::proxy::Element<crate::core::space::D2>> =
         p.elements.iter().filter(|e| e.kind == ElementKind::Surface).collect();
     let stride = surface.len().div_ceil(max_points.max(1)).max(1);
     let (cyan, red) = (Color32::from_rgb(0, 200, 220), Color32::from_rgb(255, 60, 60));
@@ -274,7 +274,7 @@ pub fn element_shapes(p: &ProbeResult, xf: &Xform, max_points: usize) -> Vec<Sha
         run.clear();
     };
     for (k, e) in surface.iter().enumerate() {
-        let (a, b) = (xf.to_screen(e.a), xf.to_screen(e.b));
+        let (a, b) = (xf.to_screen(e.v[0]), xf.to_screen(e.v[1]));
         let visible = clip_segment(a, b, xf.rect.expand(50.0)).is_some();
         if e.bridging || !visible {
             flush(&mut run, &mut shapes);
@@ -291,7 +291,7 @@ pub fn element_shapes(p: &ProbeResult, xf: &Xform, max_points: usize) -> Vec<Sha
     // Surface pieces bold; the (many more) medium shell pieces that bridge, fainter.
     let faint = Color32::from_rgba_unmultiplied(255, 60, 60, 110);
     for e in p.elements.iter().filter(|e| e.bridging) {
-        if let Some(seg) = clip_segment(xf.to_screen(e.a), xf.to_screen(e.b), xf.rect) {
+        if let Some(seg) = clip_segment(xf.to_screen(e.v[0]), xf.to_screen(e.v[1]), xf.rect) {
             let stroke = match e.kind {
                 ElementKind::Surface => Stroke::new(2.5, red),
                 ElementKind::Medium => Stroke::new(1.0, faint),

@@ -9,7 +9,7 @@ use crate::core::metric::{Extent, MetricParams, first_order_extent, second_order
 use crate::core::space::{D2, Space};
 use crate::core::taylor::Taylor2;
 use crate::core::taylor_rgb::TaylorRgb;
-use crate::flatland::derivatives::PartDerivs;
+type PartDerivs = crate::pipeline::derivatives::PartDerivs<crate::core::space::D2>;
 use crate::flatland::scene_desc::Part;
 use glam::{DMat2, DVec2};
 use std::f64::consts::{PI, TAU};

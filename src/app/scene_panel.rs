@@ -6,6 +6,7 @@
 use super::edit::{Selection, add_point_light, add_segment, segment_vertices, set_vertex};
 use super::workbench::Workbench;
 use crate::flatland::scene_desc::{Color, LightDesc, MediumDesc, RegionDesc, SceneDesc};
+use crate::pipeline::world::World;
 use eframe::egui::{self, DragValue};
 use glam::DVec2;
 

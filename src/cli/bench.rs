@@ -10,10 +10,11 @@ use std::process::ExitCode;
 use std::time::Instant;
 use volcache::core::color::Rgb;
 use volcache::core::rng::Sampler;
-use volcache::flatland::geometry::{Accel, Segment, SegmentSet};
+use volcache::flatland::geometry::{Segment, SegmentSet};
 use volcache::flatland::scene::Scene;
-use volcache::flatland::transport::{Query, Settings, estimate};
 use volcache::output::write_json;
+use volcache::pipeline::bvh::Accel;
+use volcache::pipeline::path::{Query, Settings, estimate};
 
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
@@ -107,7 +108,7 @@ fn time_queries(set: &SegmentSet, rays: &[(DVec2, DVec2)], seconds: f64) -> (u64
     let mut hits = 0u64;
     'outer: loop {
         for &(o, d) in rays {
-            hits += set.closest_hit(o, d, f64::INFINITY, None).is_some() as u64;
+            hits += set.closest_hit(o, d, 0.0, f64::INFINITY, None).is_some() as u64;
             n += 1;
             if n.is_multiple_of(1024) && start.elapsed().as_secs_f64() > seconds {
                 break 'outer;
@@ -123,7 +124,7 @@ fn flatland(b: FlatlandBench) -> anyhow::Result<ExitCode> {
     let rays = random_rays(&many, 100_000);
     let mut ray_casting = Vec::new();
     for accel in [Accel::Bvh, Accel::Linear] {
-        let set = SegmentSet::with_accel(many.geometry.segments.clone(), many.scale(), accel);
+        let set = SegmentSet::with_accel(many.geometry.prims.clone(), accel);
         let (n, secs) = time_queries(&set, &rays, b.seconds);
         let f = RayFigures {
             scene: b.many.display().to_string(),
@@ -153,7 +154,7 @@ fn flatland(b: FlatlandBench) -> anyhow::Result<ExitCode> {
                     Segment::new(c - d, c + d, Rgb::ZERO, Rgb::ZERO, true)
                 })
                 .collect();
-            SegmentSet::with_accel(segs, 2.0, accel)
+            SegmentSet::with_accel(segs, accel)
         };
         let rays = random_rays(&many, 20_000)
             .into_iter()

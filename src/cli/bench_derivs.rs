@@ -22,11 +22,12 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use volcache::flatland::derivatives::{self, AwareSettings};
-use volcache::flatland::probe::{ProbeSettings, capture};
-use volcache::flatland::proxy;
-use volcache::flatland::transport::Settings;
 use volcache::output::write_json;
+use volcache::pipeline::derivatives::{self, AwareSettings};
+use volcache::pipeline::path::Settings;
+use volcache::pipeline::probe::{Outgoing, ProbeSettings, capture};
+use volcache::pipeline::proxy;
+use volcache::pipeline::world::World;
 use volcache::progress::Progress;
 
 #[derive(Args, Debug)]
@@ -165,12 +166,20 @@ pub fn run(b: DerivBench) -> anyhow::Result<ExitCode> {
                 max_depth: r.max_depth,
                 ..Settings::default()
             },
-            ..Default::default()
+            ..ProbeSettings::default_for::<volcache::core::space::D2>()
         };
         for (k, &x) in points.iter().enumerate() {
             let t = Instant::now();
-            let lf = capture(&scene, x, omega_o, &ps, seed, k as u64, &Progress::new())
-                .map_err(|_| anyhow::anyhow!("cancelled"))?;
+            let lf = capture(
+                &scene,
+                x,
+                Outgoing::Direction(omega_o),
+                &ps,
+                seed,
+                k as u64,
+                &Progress::new(),
+            )
+            .map_err(|_| anyhow::anyhow!("cancelled"))?;
             let capture_seconds = t.elapsed().as_secs_f64();
             let plain = time_eval(min_s, || derivatives::plain_estimate(&lf));
             let unaware = time_eval(min_s, || derivatives::unaware(&lf));

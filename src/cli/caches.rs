@@ -8,9 +8,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use volcache::figure::{FieldStyle, field_figure};
-use volcache::flatland::cached_field::{
-    CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached, render_with_count,
-};
+use volcache::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached};
 use volcache::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
 use volcache::output::{write_exr, write_json, write_png};
@@ -108,7 +106,7 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
 }
 
 pub fn cache_settings(method: CacheMethod, a: &CacheArgs) -> CacheSettings {
-    let mut cs = CacheSettings::new(method, a.eps.unwrap_or(0.05));
+    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, a.eps.unwrap_or(0.05));
     cs.probe.rays = a.rays.max(3);
     cs.probe.steps = a.steps.max(1);
     cs.per_part = a.per_part;
@@ -155,9 +153,9 @@ pub fn run_method(
             let mut memo = RecordMemo::new();
             let eps = match a.caches {
                 Some(k) => {
-                    render_with_count(scene, fp, &cs, k.max(1), &mut memo, progress)
+                    render_cached(scene, fp, &cs, Some(k.max(1)), &mut memo, progress)
                         .map_err(cancelled)?
-                        .1
+                        .eps
                 }
                 None => cs.eps,
             };
@@ -167,6 +165,7 @@ pub fn run_method(
                 scene,
                 fp,
                 &CacheSettings { eps, ..cs },
+                None,
                 &mut RecordMemo::new(),
                 progress,
             )

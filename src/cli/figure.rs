@@ -36,12 +36,14 @@ use volcache::core::space::D2;
 use volcache::core::taylor::Taylor2;
 use volcache::core::taylor_rgb::TaylorRgb;
 use volcache::figure::GradientStyle;
-use volcache::flatland::derivatives::{self, AwareSettings, PartDerivs, ReferenceSettings};
-use volcache::flatland::probe::{ProbeSettings, capture};
-use volcache::flatland::proxy;
+use volcache::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
+use volcache::pipeline::world::World;
+type PartDerivs = volcache::pipeline::derivatives::PartDerivs<volcache::core::space::D2>;
 use volcache::flatland::scene::Scene;
-use volcache::flatland::transport::Settings;
 use volcache::output::{write_json, write_png};
+use volcache::pipeline::path::Settings;
+use volcache::pipeline::probe::{Outgoing, ProbeSettings, capture};
+use volcache::pipeline::proxy;
 use volcache::progress::{Cancelled, Progress};
 
 #[derive(Subcommand, Debug)]
@@ -319,7 +321,15 @@ fn compute_point(job: &Job, x: DVec2, s: Option<f64>, seed: u64, ref_spp: u32) -
     if !out.inside_medium {
         return Ok(out);
     }
-    let lf = capture(job.scene, x, job.omega_o, &job.ps, seed, 0, job.progress)?;
+    let lf = capture(
+        job.scene,
+        x,
+        Outgoing::Direction(job.omega_o),
+        &job.ps,
+        seed,
+        0,
+        job.progress,
+    )?;
     out.cost.capture_rays = lf.cost_rays;
     out.cost.capture_seconds = lf.seconds;
 
@@ -338,8 +348,16 @@ fn compute_point(job: &Job, x: DVec2, s: Option<f64>, seed: u64, ref_spp: u32) -
         spp: ref_spp.div_ceil(2).max(1),
         relative_step: job.relative_step,
     };
-    let r =
-        [1u64, 2].map(|k| derivatives::reference(job.scene, x, job.omega_o, &rs, &job.ps.settings, mix64(seed ^ k)));
+    let r = [1u64, 2].map(|k| {
+        derivatives::reference_at(
+            job.scene,
+            x,
+            Outgoing::Direction(job.omega_o),
+            &rs,
+            &job.ps.settings,
+            mix64(seed ^ k),
+        )
+    });
     let reference = average(&r[0].parts, &r[1].parts);
     out.cost.reference_rays = r.iter().map(|d| d.rays).sum();
     out.cost.reference_seconds = r.iter().map(|d| d.seconds).sum();
@@ -559,7 +577,7 @@ fn gradients(a: GradientArgs) -> anyhow::Result<ExitCode> {
             max_depth: r.max_depth,
             ..Settings::default()
         },
-        ..Default::default()
+        ..ProbeSettings::default_for::<volcache::core::space::D2>()
     };
     let aw = AwareSettings::default();
 

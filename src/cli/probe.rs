@@ -10,7 +10,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use volcache::core::color::{Rgb, luminance};
 use volcache::flatland::scene_desc::Quantity;
-use volcache::flatland::transport::{Parts, Query, Settings, estimate};
+use volcache::pipeline::path::{Parts, Query, Settings, estimate};
+use volcache::pipeline::world::World;
 
 #[derive(Clone, Copy, Debug, ValueEnum, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
@@ -61,7 +62,7 @@ pub struct ProbeArgs {
     pub medium_clamp: f64,
     /// Which radiance a proxy element carries (aware).
     #[arg(long, value_enum, default_value = "farther")]
-    pub rule: volcache::flatland::proxy::RadianceRule,
+    pub rule: volcache::pipeline::proxy::RadianceRule,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,

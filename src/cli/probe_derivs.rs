@@ -9,10 +9,12 @@ use std::process::ExitCode;
 use volcache::core::space::{D2, Space};
 use volcache::core::taylor::Taylor2;
 use volcache::core::taylor_rgb::TaylorRgb;
-use volcache::flatland::derivatives::{self, AwareSettings, Derivatives, PartDerivs, ReferenceSettings};
-use volcache::flatland::probe::{ProbeSettings, capture};
-use volcache::flatland::proxy;
-use volcache::flatland::transport::Settings;
+use volcache::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
+type PartDerivs = volcache::pipeline::derivatives::PartDerivs<volcache::core::space::D2>;
+type Derivatives = volcache::pipeline::derivatives::Derivatives<volcache::core::space::D2>;
+use volcache::pipeline::path::Settings;
+use volcache::pipeline::probe::{Outgoing, ProbeSettings, capture};
+use volcache::pipeline::proxy;
 use volcache::progress::Progress;
 
 #[derive(Serialize)]
@@ -81,11 +83,11 @@ pub fn compute(
     seed: u64,
 ) -> anyhow::Result<Derivatives> {
     Ok(match method {
-        Method::Reference => derivatives::reference(scene, x, omega_o, rs, &ps.settings, seed),
+        Method::Reference => derivatives::reference_at(scene, x, Outgoing::Direction(omega_o), rs, &ps.settings, seed),
         Method::Aware | Method::Unaware => {
             let start = std::time::Instant::now();
-            let lf =
-                capture(scene, x, omega_o, ps, seed, 0, &Progress::new()).map_err(|_| anyhow::anyhow!("cancelled"))?;
+            let lf = capture(scene, x, Outgoing::Direction(omega_o), ps, seed, 0, &Progress::new())
+                .map_err(|_| anyhow::anyhow!("cancelled"))?;
             let (parts, aware) = if method == Method::Aware {
                 (derivatives::aware(&lf, &proxy::build(&lf, aw.rule), aw), true)
             } else {
@@ -125,7 +127,7 @@ pub fn run(a: &ProbeArgs) -> anyhow::Result<ExitCode> {
         paths: a.paths.max(1),
         steps: a.steps.max(1),
         settings,
-        ..Default::default()
+        ..ProbeSettings::default_for::<volcache::core::space::D2>()
     };
     let rs = ReferenceSettings {
         spp: a.spp.unwrap_or(ReferenceSettings::default().spp),

@@ -111,7 +111,7 @@ pub fn summary(scene: &Scene, method: Method, params: &RenderParams, img: &Rende
         relative_std_error: img.relative_std_error(),
         mean_luminance: mean_luminance(&img.values),
         exposure: scene.desc.render.exposure,
-        triangles: scene.triangles.len(),
+        triangles: scene.geometry.len(),
         rays3d_closest_hit_per_second: None,
         cache: None,
         errors: None,

@@ -8,9 +8,10 @@ use clap::Args;
 use std::path::PathBuf;
 use volcache::core::metric::CacheMethod;
 use volcache::output::write_json;
+use volcache::pipeline::record::Cached;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CachedRenderParams, Placement, RecordMemo, place, place_with_count, reconstruct,
+    CacheSettings, CachedRenderParams, Placement, RecordMemo, default_eps, place, place_with_count, reconstruct,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
 use volcache::volume::render::{RenderParams, Rendered};
@@ -90,12 +91,12 @@ impl Cache3dArgs {
             anyhow::ensure!(finite_pos(d), "--march-step must be a positive distance");
             cp.march_step = d;
         }
-        let eps = self.eps.unwrap_or_else(|| CacheSettings::default_eps(method, scene));
+        let eps = self.eps.unwrap_or_else(|| default_eps(method, scene));
         anyhow::ensure!(eps.is_finite() && eps >= 0.0, "--eps must be finite and >= 0");
         if let Some(n) = self.caches {
             anyhow::ensure!(n > 0, "--caches must be at least 1");
         }
-        let mut cs = CacheSettings::new(method, eps);
+        let mut cs = CacheSettings::new::<volcache::core::space::D3>(method, eps);
         cs.probe.rays = self.rays;
         cs.probe.steps = self.steps;
         cs.probe.paths = self.paths;
@@ -137,7 +138,8 @@ pub fn run_cached(
                 anyhow::bail!("--records-in {}: {why}", path.display());
             }
             Placement {
-                cache,
+                caches: vec![cache],
+                cached: vec![Cached::Scattered],
                 eps: file.eps,
                 query_points: file.query_points,
                 rays: file.placement_rays,
@@ -159,14 +161,14 @@ pub fn run_cached(
     let mut summary = CacheSummary {
         settings: CacheSummary::settings_json(&cs),
         eps: placement.eps,
-        records: placement.cache.len(),
+        records: placement.record_count(),
         target_records: a.caches,
         query_points: placement.query_points,
         march_step: cp.march_step,
         surface_paths: cp.surface_paths,
         placement_seconds: placement.seconds,
         placement_rays: placement.rays,
-        records_per_second: placement.cache.len() as f64 / placement.seconds.max(1e-9),
+        records_per_second: placement.record_count() as f64 / placement.seconds.max(1e-9),
         reconstruction_seconds: 0.0,
         reconstruction_rays: 0,
         uncovered: 0,
@@ -177,7 +179,7 @@ pub fn run_cached(
         return Ok((None, summary));
     }
     let second_order = cs.second_order && method == CacheMethod::Ours;
-    let r = reconstruct(scene, &cp, &placement.cache, second_order, progress)?;
+    let r = reconstruct(scene, &cp, &placement.caches[0], second_order, progress)?;
     summary.reconstruction_seconds = r.image.seconds;
     summary.reconstruction_rays = r.image.rays;
     summary.uncovered = r.uncovered;

@@ -205,18 +205,18 @@ pub fn run_cache(
         None => place(scene, &cp, &cs, memo, progress)?,
     };
     let second_order = cs.second_order && method == CacheMethod::Ours;
-    let r = reconstruct(scene, &cp, &placement.cache, second_order, progress)?;
+    let r = reconstruct(scene, &cp, &placement.caches[0], second_order, progress)?;
     let name = match method {
         CacheMethod::Ours => "ours",
         CacheMethod::Jarosz08 => "jarosz08",
     };
     let mut run = Run3d::new(name, r.image, reference);
-    run.records = placement.cache.len();
+    run.records = placement.record_count();
     run.eps = Some(placement.eps);
     run.placement_seconds = placement.seconds;
     run.seconds = placement.seconds + run.reconstruction_seconds;
     run.rays += placement.rays;
-    run.record_list = placement.records();
+    run.record_list = placement.records().concat();
     Ok(run)
 }
 

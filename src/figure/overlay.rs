@@ -77,7 +77,7 @@ pub fn draw_scene(pixmap: &mut Pixmap, scene: &Scene, view: &View, style: &Overl
 
     // Segments: every outline before any core, so that joints read as one line.
     let mut marks: Vec<Mark> = Vec::new();
-    for s in &scene.geometry.segments {
+    for s in &scene.geometry.prims {
         let (a, b) = (view.to_pixel_f64(s.a), view.to_pixel_f64(s.b));
         let (width, color) = if s.is_emitter() {
             (3.5 * u, EMITTER)

@@ -57,8 +57,9 @@ impl Field {
 
 use super::scene::Scene;
 use super::scene_desc::{Part, Quantity};
-use super::transport::{Query, Settings, estimate};
 use crate::core::color::luminance;
+use crate::core::space::D2;
+use crate::pipeline::path::{Query, Settings, estimate};
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -99,7 +100,7 @@ impl FieldParams {
         }
     }
 
-    pub fn query(&self) -> Query {
+    pub fn query(&self) -> Query<D2> {
         Query::from_quantity(self.quantity, DVec2::from_angle(self.omega_o_deg.to_radians()))
     }
 }

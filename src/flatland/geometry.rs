@@ -5,8 +5,9 @@
 //! parametric tolerance so that rays through a vertex shared by two segments never
 //! slip between them. Rays parallel to a segment (grazing) do not hit it.
 
-use super::bvh::Bvh;
 use crate::core::color::Rgb;
+use crate::core::space::D2;
+use crate::pipeline::bvh::{Geometry, Primitive};
 use glam::DVec2;
 
 /// 2D cross product (z component of the 3D cross product).
@@ -99,125 +100,25 @@ pub fn intersect_segment(o: DVec2, d: DVec2, a: DVec2, b: DVec2, t_min: f64, t_m
     Some((t, u.clamp(0.0, 1.0)))
 }
 
-/// The closest intersection along a ray.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    pub t: f64,
-    pub segment: u32,
-    pub u: f64,
-}
-
-/// How ray queries are answered.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Accel {
-    /// Test every segment (fine for a few dozen).
-    Linear,
-    /// Bounding volume hierarchy (binned SAH).
-    Bvh,
-}
-
-/// Segments with an acceleration structure; ray casting for the transport code.
-#[derive(Clone, Debug)]
-pub struct SegmentSet {
-    pub segments: Vec<Segment>,
-    bvh: Bvh,
-    accel: Accel,
-    /// Minimum hit distance, relative to the scene size (avoids re-hitting at corners).
-    pub t_min: f64,
-}
-
-/// Above this many segments the BVH is used: `volcache bench flatland` measures the
-/// crossover on random segment soups (BVH ahead from 8 segments on; equal at 4).
-pub const BVH_THRESHOLD: usize = 6;
-
-impl SegmentSet {
-    pub fn new(segments: Vec<Segment>, scene_scale: f64) -> Self {
-        let accel = if segments.len() > BVH_THRESHOLD {
-            Accel::Bvh
-        } else {
-            Accel::Linear
-        };
-        Self::with_accel(segments, scene_scale, accel)
+impl Primitive<D2> for Segment {
+    fn bounds(&self) -> (DVec2, DVec2) {
+        (self.a.min(self.b), self.a.max(self.b))
     }
 
-    pub fn with_accel(segments: Vec<Segment>, scene_scale: f64, accel: Accel) -> Self {
-        let bvh = Bvh::build(&segments);
-        SegmentSet {
-            segments,
-            bvh,
-            accel,
-            t_min: 1e-10 * scene_scale.max(1e-300),
-        }
-    }
-
-    pub fn accel(&self) -> Accel {
-        self.accel
-    }
-
-    pub fn len(&self) -> usize {
-        self.segments.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.segments.is_empty()
-    }
-
-    /// Closest hit along o + t·d with t < t_max, ignoring segment `skip`.
-    pub fn closest_hit(&self, o: DVec2, d: DVec2, t_max: f64, skip: Option<u32>) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let test = |i: u32, best: &mut Option<Hit>| {
-            let t_best = best.map_or(t_max, |h| h.t);
-            if Some(i) == skip {
-                return t_best;
-            }
-            let s = &self.segments[i as usize];
-            if let Some((t, u)) = intersect_segment(o, d, s.a, s.b, self.t_min, t_best) {
-                *best = Some(Hit { t, segment: i, u });
-                return t;
-            }
-            t_best
-        };
-        match self.accel {
-            Accel::Linear => {
-                for i in 0..self.segments.len() as u32 {
-                    test(i, &mut best);
-                }
-            }
-            Accel::Bvh => self.bvh.traverse(o, d, |i, _| test(i, &mut best)),
-        }
-        best
-    }
-
-    /// True when something blocks o + t·d for t in (t_min, t_max).
-    pub fn occluded(&self, o: DVec2, d: DVec2, t_max: f64, skip: Option<u32>) -> bool {
-        let t_hi = t_max * (1.0 - 1e-10);
-        let blocks = |i: u32| {
-            Some(i) != skip && {
-                let s = &self.segments[i as usize];
-                intersect_segment(o, d, s.a, s.b, self.t_min, t_hi).is_some()
-            }
-        };
-        match self.accel {
-            Accel::Linear => (0..self.segments.len() as u32).any(blocks),
-            Accel::Bvh => {
-                let mut hit = false;
-                self.bvh.traverse(o, d, |i, _| {
-                    if blocks(i) {
-                        hit = true;
-                        return -1.0; // stop: nothing can be closer than a negative bound
-                    }
-                    t_hi
-                });
-                hit
-            }
-        }
+    #[inline]
+    fn intersect(&self, o: DVec2, d: DVec2, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
+        intersect_segment(o, d, self.a, self.b, t_min, t_max).map(|(t, u)| (t, u, 0.0))
     }
 }
+
+/// Segments with their acceleration structure (`pipeline::bvh`).
+pub type SegmentSet = Geometry<D2, Segment>;
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::core::rng::Sampler;
+    use crate::pipeline::bvh::Accel;
 
     fn seg(a: (f64, f64), b: (f64, f64)) -> Segment {
         Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1), Rgb::ZERO, Rgb::ZERO, true)
@@ -238,10 +139,10 @@ mod tests {
     fn shared_vertices_are_watertight() {
         let pts = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
         let segs: Vec<Segment> = (0..4).map(|i| seg(pts[i], pts[(i + 1) % 4])).collect();
-        let set = SegmentSet::new(segs, 2.0);
+        let set = SegmentSet::new(segs);
         for &(x, y) in &pts {
             let d = DVec2::new(x, y).normalize();
-            assert!(set.closest_hit(DVec2::ZERO, d, f64::INFINITY, None).is_some());
+            assert!(set.closest_hit(DVec2::ZERO, d, 2e-10, f64::INFINITY, None).is_some());
         }
     }
 
@@ -256,8 +157,9 @@ mod tests {
                 Segment::new(c - d, c + d, Rgb::ZERO, Rgb::ZERO, true)
             })
             .collect();
-        let lin = SegmentSet::with_accel(segs.clone(), 20.0, Accel::Linear);
-        let bvh = SegmentSet::with_accel(segs, 20.0, Accel::Bvh);
+        let lin = SegmentSet::with_accel(segs.clone(), Accel::Linear);
+        let bvh = SegmentSet::with_accel(segs, Accel::Bvh);
+        let t_min = 2e-9;
         for _ in 0..5000 {
             let o = DVec2::new(s.next_f64() * 24.0 - 12.0, s.next_f64() * 24.0 - 12.0);
             let d = DVec2::from_angle(s.next_f64() * 6.3);
@@ -266,8 +168,14 @@ mod tests {
             } else {
                 s.next_f64() * 10.0
             };
-            assert_eq!(lin.closest_hit(o, d, t_max, None), bvh.closest_hit(o, d, t_max, None));
-            assert_eq!(lin.occluded(o, d, t_max, Some(7)), bvh.occluded(o, d, t_max, Some(7)));
+            assert_eq!(
+                lin.closest_hit(o, d, t_min, t_max, None),
+                bvh.closest_hit(o, d, t_min, t_max, None)
+            );
+            assert_eq!(
+                lin.occluded(o, d, t_min, t_max, Some(7)),
+                bvh.occluded(o, d, t_min, t_max, Some(7))
+            );
         }
     }
 }

@@ -8,71 +8,17 @@
 //! - Emitting segments are sampled by subtended angle (uniform in angle, exact in
 //!   2D) and combined with lobe sampling by the power heuristic (MIS).
 
-use super::geometry::cross;
+use super::geometry::{cross, intersect_segment};
 use super::scene::Scene;
 use crate::core::color::Rgb;
-use crate::core::phase::Hg2;
+use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
+use crate::core::space::D2;
+use crate::pipeline::world::{DirectLight, World};
 use glam::DVec2;
-use std::f64::consts::TAU;
 
-/// What a vertex does with light arriving from a direction ω: value(ω) is the
-/// factor multiplying L_i(ω) dθ (phase function, BRDF × cosine, or 1).
-#[derive(Clone, Copy, Debug)]
-pub enum Lobe {
-    /// Scattering in a medium; `travel` is the direction the path arrived along
-    /// (value f(travel, ω), HG is symmetric).
-    Phase { hg: Hg2, travel: DVec2 },
-    /// Lambertian reflection on the side with unit `normal`: (ρ/2)·max(0, n·ω).
-    Lambert { normal: DVec2, reflectance: Rgb },
-    /// Plain integration over the circle (fluence).
-    Uniform,
-}
-
-impl Lobe {
-    /// Value and sampling pdf (per radian) of direction `w`.
-    #[inline]
-    pub fn eval(&self, w: DVec2) -> (Rgb, f64) {
-        match *self {
-            Lobe::Phase { hg, travel } => {
-                let f = hg.eval(travel, w);
-                (Rgb::splat(f), f)
-            }
-            Lobe::Lambert { normal, reflectance } => {
-                let c = normal.dot(w).max(0.0);
-                (reflectance * (0.5 * c), 0.5 * c)
-            }
-            Lobe::Uniform => (Rgb::ONE, 1.0 / TAU),
-        }
-    }
-
-    /// Sample a direction: (ω, value/pdf, pdf).
-    #[inline]
-    pub fn sample(&self, s: &mut Sampler) -> (DVec2, Rgb, f64) {
-        match *self {
-            Lobe::Phase { hg, travel } => {
-                let w = hg.sample(travel, s.next_f64());
-                (w, Rgb::ONE, hg.eval(travel, w))
-            }
-            Lobe::Lambert { normal, reflectance } => {
-                // pdf cosθ/2 on the half circle: sinθ uniform in [−1, 1].
-                let sin_t = 2.0 * s.next_f64() - 1.0;
-                let cos_t = (1.0 - sin_t * sin_t).max(0.0).sqrt();
-                let w = normal * cos_t + normal.perp() * sin_t;
-                (w, reflectance, 0.5 * cos_t)
-            }
-            Lobe::Uniform => (DVec2::from_angle(TAU * s.next_f64()), Rgb::splat(TAU), 1.0 / TAU),
-        }
-    }
-}
-
-pub use crate::core::mis::power_heuristic;
-
-/// Transmittance along p + t·w for t in [0, dist] (one for vacuum).
-#[inline]
-fn transmittance(scene: &Scene, p: DVec2, w: DVec2, dist: f64) -> Rgb {
-    scene.medium.as_ref().map_or(Rgb::ONE, |m| m.transmittance(p, w, dist))
-}
+/// A path vertex's lobe in flatland.
+pub type Lobe = crate::pipeline::lobe::Lobe<D2>;
 
 /// Light from point and collimated lights arriving at `p` and weighted by `lobe`
 /// (∫ value(ω) L_i,delta(ω) dω). `skip` is the segment `p` lies on, if any.
@@ -92,10 +38,10 @@ pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, ra
             continue;
         }
         *rays += 1;
-        if scene.geometry.occluded(p, w, r, skip) {
+        if scene.occluded(p, w, r, skip) {
             continue;
         }
-        sum += value * l.intensity * transmittance(scene, p, w, r) / r.max(r_min);
+        sum += value * l.intensity * scene.transmittance(p, w, r) / r.max(r_min);
     }
     for l in &scene.collimated_lights {
         let w = -l.direction;
@@ -104,16 +50,14 @@ pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, ra
             continue;
         }
         // The beam reaches p only through its aperture.
-        let Some((t_ap, _)) =
-            super::geometry::intersect_segment(p, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY)
-        else {
+        let Some((t_ap, _)) = intersect_segment(p, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY) else {
             continue;
         };
         *rays += 1;
-        if scene.geometry.occluded(p, w, t_ap, skip) {
+        if scene.occluded(p, w, t_ap, skip) {
             continue;
         }
-        sum += value * l.irradiance * transmittance(scene, p, w, t_ap);
+        sum += value * l.irradiance * scene.transmittance(p, w, t_ap);
     }
     sum
 }
@@ -121,7 +65,7 @@ pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, ra
 /// Angle subtended at `p` by segment `i`, and the direction to its end `a`.
 #[inline]
 fn subtended(scene: &Scene, p: DVec2, i: u32) -> (f64, DVec2, DVec2) {
-    let s = &scene.geometry.segments[i as usize];
+    let s = &scene.geometry.prims[i as usize];
     let (a, b) = (s.a - p, s.b - p);
     (cross(a, b).abs().atan2(a.dot(b)), a, b)
 }
@@ -129,12 +73,12 @@ fn subtended(scene: &Scene, p: DVec2, i: u32) -> (f64, DVec2, DVec2) {
 /// Probability density (per radian) with which [`emitter_nee`] at `p` picks the
 /// direction that hits emitting segment `seg`.
 pub fn emitter_pdf(scene: &Scene, p: DVec2, seg: u32) -> f64 {
-    let Ok(k) = scene.emitters.binary_search(&seg) else {
+    let Some(k) = scene.emitters.find(seg) else {
         return 0.0;
     };
     let (theta, _, _) = subtended(scene, p, seg);
     if theta > 0.0 {
-        scene.emitter_probability(k) / theta
+        scene.emitters.probability(k) / theta
     } else {
         0.0
     }
@@ -155,17 +99,12 @@ pub fn emitter_nee(
     if scene.emitters.is_empty() {
         return Rgb::ZERO;
     }
-    let u = s.next_f64();
-    let k = scene
-        .emitter_cdf
-        .partition_point(|&c| c <= u)
-        .min(scene.emitters.len() - 1);
-    let i = scene.emitters[k];
+    let (k, i) = scene.emitters.pick(s.next_f64());
     let v = s.next_f64();
     if Some(i) == skip {
         return Rgb::ZERO;
     }
-    let seg = &scene.geometry.segments[i as usize];
+    let seg = &scene.geometry.prims[i as usize];
     let (theta, a, b) = subtended(scene, p, i);
     if theta <= 1e-300 {
         return Rgb::ZERO;
@@ -190,10 +129,51 @@ pub fn emitter_nee(
         return Rgb::ZERO;
     }
     *rays += 1;
-    if scene.geometry.occluded(p, w, dist, skip) {
+    if scene.occluded(p, w, dist, skip) {
         return Rgb::ZERO;
     }
-    let light_pdf = scene.emitter_probability(k) / theta;
+    let light_pdf = scene.emitters.probability(k) / theta;
     let weight = if mis { power_heuristic(light_pdf, lobe_pdf) } else { 1.0 };
-    value * seg.emission * transmittance(scene, p, w, dist) * (weight / light_pdf)
+    value * seg.emission * scene.transmittance(p, w, dist) * (weight / light_pdf)
+}
+
+/// The delta lights visible from `x` (theory.md §2), and the shadow rays this cost.
+pub fn gather_direct(scene: &Scene, x: DVec2) -> (Vec<DirectLight<D2>>, u64) {
+    let mut out = Vec::new();
+    let mut rays = 0;
+    for l in &scene.point_lights {
+        let d = l.position - x;
+        let r = d.length();
+        if r == 0.0 {
+            continue;
+        }
+        rays += 1;
+        if !scene.occluded(x, d / r, r, None) {
+            out.push(DirectLight::Point {
+                position: l.position,
+                intensity: l.intensity,
+                transmittance: scene.transmittance(x, d / r, r),
+            });
+        }
+    }
+    for l in &scene.collimated_lights {
+        let w = -l.direction;
+        let Some((t, _)) = intersect_segment(x, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY) else {
+            continue;
+        };
+        rays += 1;
+        if !scene.occluded(x, w, t, None) {
+            // The distance t(x) = n·(x − a0)/(n·dir) to the aperture is linear in x.
+            let n = (l.aperture[1] - l.aperture[0]).perp().normalize();
+            let nd = n.dot(l.direction);
+            out.push(DirectLight::Directional {
+                to_light: w,
+                irradiance: l.irradiance,
+                depth: t,
+                depth_grad: if nd.abs() > 1e-12 { n / nd } else { DVec2::ZERO },
+                transmittance: scene.transmittance(x, w, t),
+            });
+        }
+    }
+    (out, rays)
 }

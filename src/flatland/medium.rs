@@ -4,16 +4,10 @@
 //! Scene parameters (see `scene_desc::MediumDesc`): `sigma_a`, `sigma_s` (m⁻¹, RGB or
 //! scalar), `g` (Henyey–Greenstein, in (−1, 1)), `region`.
 //!
-//! One routine walks the medium along a ray (pbrt-v4's rule): [`Medium::intervals`]
-//! gives the pieces of the ray inside the region, and both free-flight sampling and
-//! transmittance use it. Chromatic media use the balance heuristic over the three
-//! channels' free-flight pdfs (one channel drawn per flight), so every channel stays
-//! unbiased and weights stay bounded.
+//! The medium itself is the pipeline's ([`crate::pipeline::medium`]); this module
+//! gives it its 2D region.
 
-use crate::core::color::Rgb;
-use crate::core::phase::Hg2;
-use crate::core::rng::Sampler;
-use crate::core::transmittance::transmittance;
+use crate::core::space::D2;
 use glam::DVec2;
 use smallvec::SmallVec;
 
@@ -28,41 +22,22 @@ pub enum Region {
 /// Pieces [t0, t1] of a ray inside the medium, in increasing order.
 pub type Intervals = SmallVec<[(f64, f64); 4]>;
 
-#[derive(Clone, Debug, PartialEq)]
-pub struct Medium {
-    pub sigma_a: Rgb,
-    pub sigma_s: Rgb,
-    pub sigma_t: Rgb,
-    pub phase: Hg2,
-    pub region: Region,
-}
+/// A homogeneous medium in flatland.
+pub type Medium = crate::pipeline::medium::Medium<D2, Region>;
 
-pub use crate::core::free_flight::Flight;
+impl crate::pipeline::medium::Region<D2> for Region {
+    type Pieces = Intervals;
 
-impl Medium {
-    pub fn new(sigma_a: Rgb, sigma_s: Rgb, g: f64, region: Region) -> Self {
-        let sigma_t = sigma_a + sigma_s;
-        Medium {
-            sigma_a,
-            sigma_s,
-            sigma_t,
-            phase: Hg2::new(g),
-            region,
-        }
-    }
-
-    /// Is `p` inside the medium's region?
-    pub fn contains(&self, p: DVec2) -> bool {
-        match &self.region {
+    fn contains(&self, p: DVec2) -> bool {
+        match self {
             Region::Everywhere => true,
             Region::Polygon(poly) => crossings(poly, p, DVec2::X).len() % 2 == 1,
         }
     }
 
-    /// The parts of o + t·d, 0 ≤ t ≤ t_max, that lie inside the region.
-    pub fn intervals(&self, o: DVec2, d: DVec2, t_max: f64) -> Intervals {
+    fn pieces(&self, o: DVec2, d: DVec2, t_max: f64) -> Intervals {
         let mut out = Intervals::new();
-        match &self.region {
+        match self {
             Region::Everywhere => out.push((0.0, t_max)),
             Region::Polygon(poly) => {
                 let mut ts = crossings(poly, o, d);
@@ -87,35 +62,6 @@ impl Medium {
             }
         }
         out
-    }
-
-    /// Length of o + t·d, 0 ≤ t ≤ t_max, inside the medium.
-    pub fn length_inside(&self, o: DVec2, d: DVec2, t_max: f64) -> f64 {
-        match self.region {
-            Region::Everywhere => t_max,
-            _ => self.intervals(o, d, t_max).iter().map(|(a, b)| b - a).sum(),
-        }
-    }
-
-    /// Transmittance along o + t·d from t = 0 to t_max.
-    pub fn transmittance(&self, o: DVec2, d: DVec2, t_max: f64) -> Rgb {
-        if t_max.is_infinite() {
-            return if self.sigma_t == Rgb::ZERO || self.length_inside(o, d, t_max) == 0.0 {
-                Rgb::ONE
-            } else {
-                Rgb::new(
-                    if self.sigma_t.x > 0.0 { 0.0 } else { 1.0 },
-                    if self.sigma_t.y > 0.0 { 0.0 } else { 1.0 },
-                    if self.sigma_t.z > 0.0 { 0.0 } else { 1.0 },
-                )
-            };
-        }
-        transmittance(self.sigma_t, self.length_inside(o, d, t_max))
-    }
-
-    /// Sample the distance to the next real scattering event before `t_max`.
-    pub fn sample_flight(&self, o: DVec2, d: DVec2, t_max: f64, s: &mut Sampler) -> Flight {
-        crate::core::free_flight::sample_flight(self.sigma_t, self.sigma_s, self.intervals(o, d, t_max), s)
     }
 }
 
@@ -144,6 +90,11 @@ fn crossings(poly: &[DVec2], o: DVec2, d: DVec2) -> SmallVec<[f64; 8]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::color::Rgb;
+    use crate::core::free_flight::Flight;
+    use crate::core::rng::Sampler;
+    use crate::core::transmittance::transmittance;
+    use crate::pipeline::medium::Region as _;
 
     fn square() -> Region {
         Region::Polygon(vec![
@@ -157,9 +108,9 @@ mod tests {
     #[test]
     fn intervals_clip_to_region() {
         let m = Medium::new(Rgb::ONE, Rgb::ONE, 0.0, square());
-        let iv = m.intervals(DVec2::new(-1.0, 1.0), DVec2::X, 10.0);
+        let iv = m.region.pieces(DVec2::new(-1.0, 1.0), DVec2::X, 10.0);
         assert_eq!(iv.as_slice(), &[(1.0, 3.0)]);
-        let iv = m.intervals(DVec2::new(1.0, 1.0), DVec2::X, 0.5);
+        let iv = m.region.pieces(DVec2::new(1.0, 1.0), DVec2::X, 0.5);
         assert_eq!(iv.as_slice(), &[(0.0, 0.5)]);
         assert!(m.contains(DVec2::new(1.0, 1.0)) && !m.contains(DVec2::new(3.0, 1.0)));
         // Through a vertex diagonally: one piece of length 2√2.

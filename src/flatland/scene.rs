@@ -5,10 +5,15 @@
 //! the JSON path of the field and the problem. The default scene is embedded.
 
 use super::geometry::{Segment, SegmentSet};
+use super::lights::{self, Lobe};
 use super::medium::{Medium, Region};
 use super::scene_desc::{LightDesc, RegionDesc, SceneDesc};
 use super::validate::{Problem, validate};
-use crate::core::color::{Rgb, luminance};
+use crate::core::color::Rgb;
+use crate::core::rng::Sampler;
+use crate::core::space::D2;
+use crate::pipeline::emitters::Emitters;
+use crate::pipeline::world::{DirectLight, Hit, SurfacePoint, World};
 use glam::DVec2;
 use std::path::Path;
 
@@ -16,29 +21,7 @@ use std::path::Path;
 pub const DEFAULT_SCENE_NAME: &str = "occluder.json";
 pub const DEFAULT_SCENE_JSON: &str = include_str!("../../flatland_scenes/occluder.json");
 
-#[derive(Debug, thiserror::Error)]
-pub enum SceneError {
-    #[error("{file}: cannot read the scene: {message}")]
-    Io { file: String, message: String },
-    #[error("{file}: {}", format_problems(.problems))]
-    Invalid { file: String, problems: Vec<Problem> },
-}
-
-fn format_problems(p: &[Problem]) -> String {
-    p.iter()
-        .map(|p| format!("{}: {}", p.path, p.message))
-        .collect::<Vec<_>>()
-        .join("; ")
-}
-
-impl SceneError {
-    pub fn problems(&self) -> &[Problem] {
-        match self {
-            SceneError::Invalid { problems, .. } => problems,
-            SceneError::Io { .. } => &[],
-        }
-    }
-}
+pub use crate::scene_check::SceneError;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointLight {
@@ -68,10 +51,11 @@ pub struct Scene {
     pub geometry: SegmentSet,
     pub point_lights: Vec<PointLight>,
     pub collimated_lights: Vec<CollimatedLight>,
-    /// Indices of emitting segments and the CDF used to pick one for NEE.
-    pub emitters: Vec<u32>,
-    pub emitter_cdf: Vec<f64>,
+    /// Emitting segments, picked for NEE ∝ luminance × length.
+    pub emitters: Emitters,
     pub medium: Option<Medium>,
+    /// Minimum hit distance (avoids re-hitting at corners), relative to the size.
+    pub t_min: f64,
 }
 
 impl Scene {
@@ -169,52 +153,52 @@ impl Scene {
         });
         // A medium that neither scatters nor absorbs costs nothing: drop it.
         let medium = medium.filter(|m| m.sigma_t.max_element() > 0.0);
-        // Pick emitters for NEE in proportion to (luminance of emission) × length.
-        let emitters: Vec<u32> = (0..segments.len() as u32)
-            .filter(|&i| segments[i as usize].is_emitter())
-            .collect();
-        let weights: Vec<f64> = emitters
-            .iter()
-            .map(|&i| {
-                let s = &segments[i as usize];
-                luminance(s.emission).max(1e-3 * s.emission.max_element()) * s.length()
-            })
-            .collect();
-        let total: f64 = weights.iter().sum();
-        let mut acc = 0.0;
-        let emitter_cdf = weights
-            .iter()
-            .map(|w| {
-                acc += w / total;
-                acc
-            })
-            .collect();
+        let emitters = Emitters::new(
+            segments
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.is_emitter())
+                .map(|(i, s)| (i as u32, s.emission, s.length())),
+        );
         let scale = (domain_max - domain_min).length();
         Scene {
             desc,
             source: file.to_string(),
             domain_min,
             domain_max,
-            geometry: SegmentSet::new(segments, scale),
+            geometry: SegmentSet::new(segments),
             point_lights,
             collimated_lights,
             emitters,
-            emitter_cdf,
             medium,
+            t_min: 1e-10 * scale.max(1e-300),
         }
-    }
-
-    /// Diagonal of the domain: the scene's length scale.
-    pub fn scale(&self) -> f64 {
-        (self.domain_max - self.domain_min).length()
     }
 
     /// Radius of the world disc (around the domain centre) where unbounded media
     /// end, in scene sizes.
     pub const WORLD_RADIUS: f64 = 1e3;
+}
 
-    /// Distance along p + t·d to the boundary of the world disc (0 outside it).
-    pub fn world_exit(&self, p: DVec2, d: DVec2) -> f64 {
+impl World for Scene {
+    type S = D2;
+    type Region = Region;
+
+    /// Diagonal of the domain.
+    fn scale(&self) -> f64 {
+        (self.domain_max - self.domain_min).length()
+    }
+
+    fn closest_hit(&self, o: DVec2, d: DVec2, t_max: f64, skip: Option<u32>) -> Option<Hit> {
+        let (t, prim, u, v) = self.geometry.closest_hit(o, d, self.t_min, t_max, skip)?;
+        Some(Hit { t, prim, u, v })
+    }
+
+    fn occluded(&self, o: DVec2, d: DVec2, t_max: f64, skip: Option<u32>) -> bool {
+        self.geometry.occluded(o, d, self.t_min, t_max * (1.0 - 1e-10), skip)
+    }
+
+    fn world_exit(&self, p: DVec2, d: DVec2) -> f64 {
         let c = 0.5 * (self.domain_min + self.domain_max);
         let r = Self::WORLD_RADIUS * self.scale();
         let o = p - c;
@@ -223,14 +207,36 @@ impl Scene {
         if disc <= 0.0 { 0.0 } else { (-b + disc.sqrt()).max(0.0) }
     }
 
-    /// Probability of picking emitter number `k` (index into `emitters`).
-    pub fn emitter_probability(&self, k: usize) -> f64 {
-        self.emitter_cdf[k] - if k == 0 { 0.0 } else { self.emitter_cdf[k - 1] }
+    fn medium(&self) -> Option<&Medium> {
+        self.medium.as_ref()
     }
 
-    /// The medium at `p`, if any.
-    pub fn medium_at(&self, p: DVec2) -> Option<&Medium> {
-        self.medium.as_ref().filter(|m| m.contains(p))
+    fn surface(&self, hit: &Hit, dir: DVec2) -> SurfacePoint<D2> {
+        let seg = &self.geometry.prims[hit.prim as usize];
+        let (normal, active) = seg.facing_dir(dir);
+        SurfacePoint {
+            point: seg.point_at(hit.u),
+            normal,
+            active,
+            emission: seg.emission,
+            reflectance: seg.reflectance,
+        }
+    }
+
+    fn delta_lights(&self, p: DVec2, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
+        lights::direct_lights(self, p, lobe, skip, rays)
+    }
+
+    fn sampled_nee(&self, p: DVec2, lobe: &Lobe, skip: Option<u32>, mis: bool, s: &mut Sampler, rays: &mut u64) -> Rgb {
+        lights::emitter_nee(self, p, lobe, skip, mis, s, rays)
+    }
+
+    fn emitter_pdf(&self, from: DVec2, prim: u32, _y: DVec2) -> f64 {
+        lights::emitter_pdf(self, from, prim)
+    }
+
+    fn direct_lights(&self, x: DVec2) -> (Vec<DirectLight<D2>>, u64) {
+        lights::gather_direct(self, x)
     }
 }
 

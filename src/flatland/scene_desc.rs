@@ -6,65 +6,10 @@
 //! The README documents the format with an annotated example. These structs
 //! serialise back exactly what was loaded, so the app can save scenes.
 
-use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use serde::{Deserialize, Serialize};
 
-/// An RGB value written either as a scalar (grey) or as `[r, g, b]`.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct Color(pub [f64; 3]);
-
-impl Color {
-    pub fn grey(v: f64) -> Self {
-        Color([v; 3])
-    }
-    pub fn is_zero(&self) -> bool {
-        self.0 == [0.0; 3]
-    }
-}
-
-impl Serialize for Color {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let [r, g, b] = self.0;
-        if r == g && g == b {
-            s.serialize_f64(r)
-        } else {
-            self.0.serialize(s)
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for Color {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> serde::de::Visitor<'de> for V {
-            type Value = Color;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a number or an [r, g, b] array of three numbers")
-            }
-            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Color, E> {
-                Ok(Color::grey(v))
-            }
-            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Color, E> {
-                Ok(Color::grey(v as f64))
-            }
-            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Color, E> {
-                Ok(Color::grey(v as f64))
-            }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<Color, A::Error> {
-                let mut c = [0.0; 3];
-                for (i, slot) in c.iter_mut().enumerate() {
-                    *slot = a
-                        .next_element()?
-                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
-                }
-                if a.next_element::<f64>()?.is_some() {
-                    return Err(serde::de::Error::invalid_length(4, &self));
-                }
-                Ok(Color(c))
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
+pub use crate::core::color::Color;
+pub use crate::pipeline::path::{Part, Quantity};
 
 /// A whole flatland scene file.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -265,26 +210,6 @@ pub enum RegionDesc {
     Rect(RectDesc),
     /// A simple polygon (even-odd rule), at least three vertices.
     Polygon(Vec<[f64; 2]>),
-}
-
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum Quantity {
-    /// In-scattered radiance L_s(x, ω_o) (the cached quantity).
-    #[default]
-    Ls,
-    /// Fluence φ(x) = ∫ L_i dθ.
-    Fluence,
-}
-
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum Part {
-    #[default]
-    All,
-    Direct,
-    Single,
-    Multiple,
 }
 
 /// Defaults for rendering the scene's field with no flags.

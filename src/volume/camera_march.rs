@@ -14,15 +14,13 @@ use super::camera::Camera;
 use super::mesh::Hit;
 use super::scene::Scene;
 use crate::core::rng::Sampler;
+use crate::pipeline::medium::Region;
+use crate::pipeline::world::World;
 use glam::{DVec2, DVec3};
 
 /// At most this many march points per camera ray: a step far below the scene's
 /// size is stretched on long rays rather than allowed to hang the render.
 pub const MAX_MARCH_POINTS: usize = 1 << 14;
-
-/// Identifies a query point of an image: (full-image pixel index, camera sample,
-/// march point). Record streams and the memo of light fields are keyed by it.
-pub type QueryKey = (u32, u32, u32);
 
 /// One camera sample's ray.
 #[derive(Clone, Copy, Debug)]
@@ -48,7 +46,7 @@ impl CameraRay {
         let origin = cam.position;
         let hit = scene.closest_hit(origin, dir, f64::INFINITY, None);
         let end = hit.map_or_else(|| scene.world_exit(origin, dir), |h| h.t);
-        let medium = scene.medium.as_ref().and_then(|m| m.interval(origin, dir, end));
+        let medium = scene.medium.as_ref().and_then(|m| m.region.pieces(origin, dir, end));
         (
             CameraRay {
                 origin,

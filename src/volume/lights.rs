@@ -12,65 +12,16 @@
 
 use super::scene::Scene;
 use crate::core::color::Rgb;
-use crate::core::phase::Hg3;
+use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
+use crate::core::space::D3;
+use crate::pipeline::dim::Dim;
+use crate::pipeline::world::{DirectLight, World};
 use glam::DVec3;
-use std::f64::consts::{FRAC_1_PI, PI, TAU};
+use std::f64::consts::{PI, TAU};
 
-/// What a vertex does with light arriving from ω: value(ω) multiplies L_i(ω) dω.
-#[derive(Clone, Copy, Debug)]
-pub enum Lobe {
-    /// Scattering in a medium; `travel` is the direction the path arrived along.
-    Phase { hg: Hg3, travel: DVec3 },
-    /// Lambertian reflection on the side of unit `normal`: (ρ/π)·max(0, n·ω).
-    Lambert { normal: DVec3, reflectance: Rgb },
-}
-
-impl Lobe {
-    /// Value and sampling pdf (per steradian) of direction `w`.
-    #[inline]
-    pub fn eval(&self, w: DVec3) -> (Rgb, f64) {
-        match *self {
-            Lobe::Phase { hg, travel } => {
-                let f = hg.eval(travel, w);
-                (Rgb::splat(f), f)
-            }
-            Lobe::Lambert { normal, reflectance } => {
-                let c = normal.dot(w).max(0.0) * FRAC_1_PI;
-                (reflectance * c, c)
-            }
-        }
-    }
-
-    /// Sample a direction: (ω, value/pdf, pdf).
-    #[inline]
-    pub fn sample(&self, s: &mut Sampler) -> (DVec3, Rgb, f64) {
-        let (u1, u2) = (s.next_f64(), s.next_f64());
-        match *self {
-            Lobe::Phase { hg, travel } => {
-                let w = hg.sample(travel, u1, u2);
-                (w, Rgb::ONE, hg.eval(travel, w))
-            }
-            Lobe::Lambert { normal, reflectance } => {
-                // Cosine-weighted: a uniform disc point lifted to the hemisphere.
-                let r = u1.sqrt();
-                let phi = TAU * u2;
-                let z = (1.0 - u1).max(0.0).sqrt();
-                let (t, b) = normal.any_orthonormal_pair();
-                let w = (t * (r * phi.cos()) + b * (r * phi.sin()) + normal * z).normalize();
-                (w, reflectance, normal.dot(w).max(0.0) * FRAC_1_PI)
-            }
-        }
-    }
-}
-
-pub use crate::core::mis::power_heuristic;
-
-/// Transmittance along p + t·w for t in [0, dist] (one in vacuum).
-#[inline]
-pub fn transmittance(scene: &Scene, p: DVec3, w: DVec3, dist: f64) -> Rgb {
-    scene.medium.as_ref().map_or(Rgb::ONE, |m| m.transmittance(p, w, dist))
-}
+/// A path vertex's lobe in 3D.
+pub type Lobe = crate::pipeline::lobe::Lobe<D3>;
 
 /// Transmittance towards infinity along an unoccluded ray (the medium ends at the
 /// world sphere, as for paths that escape).
@@ -100,7 +51,7 @@ pub fn delta_lights(scene: &Scene, p: DVec3, lobe: &Lobe, skip: Option<u32>, ray
         }
         *rays += 1;
         if !scene.occluded(p, w, r, skip) {
-            sum += value * l.intensity * transmittance(scene, p, w, r) / r2;
+            sum += value * l.intensity * scene.transmittance(p, w, r) / r2;
         }
     }
     for sun in scene.suns.iter().filter(|s| s.is_delta()) {
@@ -152,11 +103,7 @@ pub fn distant_nee(
         sum += value * radiance * transmittance_to_infinity(scene, p, w) * (weight / pdf_light);
     };
     if scene.sky != Rgb::ZERO {
-        let (u1, u2) = (s.next_f64(), s.next_f64());
-        let z = 1.0 - 2.0 * u1;
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let w = DVec3::new(r * (TAU * u2).cos(), r * (TAU * u2).sin(), z);
-        one(w, 1.0 / (4.0 * PI), scene.sky, rays);
+        one(D3::sample_uniform(s), 1.0 / (4.0 * PI), scene.sky, rays);
     }
     for sun in scene.suns.iter().filter(|s| !s.is_delta()) {
         let (u1, u2) = (s.next_f64(), s.next_f64());
@@ -185,17 +132,17 @@ pub fn escaped_radiance(scene: &Scene, w: DVec3, lobe_pdf: Option<f64>) -> Rgb {
 /// Solid-angle pdf with which [`emitter_nee`] at `p` samples point `y` of emitting
 /// triangle `tri`.
 pub fn emitter_pdf(scene: &Scene, p: DVec3, tri: u32, y: DVec3) -> f64 {
-    let Ok(k) = scene.emitters.binary_search(&tri) else {
+    let Some(k) = scene.emitters.find(tri) else {
         return 0.0;
     };
-    let t = &scene.triangles[tri as usize];
+    let t = &scene.geometry.prims[tri as usize];
     let d = y - p;
     let r2 = d.length_squared();
     let cos_l = t.normal.dot(d).abs() / r2.sqrt();
     if cos_l <= 0.0 {
         return 0.0;
     }
-    scene.emitter_probability(k) / t.area * r2 / cos_l
+    scene.emitters.probability(k) / t.area * r2 / cos_l
 }
 
 /// One-sample NEE to emitting triangles at `p`, weighted by `lobe`; with `mis`, the
@@ -213,18 +160,13 @@ pub fn emitter_nee(
     if scene.emitters.is_empty() {
         return Rgb::ZERO;
     }
-    let u = s.next_f64();
-    let k = scene
-        .emitter_cdf
-        .partition_point(|&c| c <= u)
-        .min(scene.emitters.len() - 1);
-    let i = scene.emitters[k];
+    let (k, i) = scene.emitters.pick(s.next_f64());
     let (u1, u2) = (s.next_f64(), s.next_f64());
     if Some(i) == skip {
         return Rgb::ZERO;
     }
-    let t = &scene.triangles[i as usize];
-    let surf = scene.surface(i);
+    let t = &scene.geometry.prims[i as usize];
+    let surf = scene.material(i);
     let y = t.sample_point(u1, u2);
     let d = y - p;
     let r2 = d.length_squared();
@@ -247,9 +189,9 @@ pub fn emitter_nee(
     if scene.occluded(p, w, r * (1.0 - 1e-9), skip) {
         return Rgb::ZERO;
     }
-    let pdf_light = scene.emitter_probability(k) / t.area * r2 / cos_l;
+    let pdf_light = scene.emitters.probability(k) / t.area * r2 / cos_l;
     let weight = if mis { power_heuristic(pdf_light, pdf_lobe) } else { 1.0 };
-    value * surf.emission * transmittance(scene, p, w, r) * (weight / pdf_light)
+    value * surf.emission * scene.transmittance(p, w, r) * (weight / pdf_light)
 }
 
 /// The direct part of L_s (theory.md §2) at a medium point: delta lights and suns
@@ -273,17 +215,53 @@ pub fn direct_part(scene: &Scene, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: 
     sum
 }
 
-/// All NEE at a vertex: delta lights, distant lights with a solid angle, emitters.
-pub fn all_nee(
-    scene: &Scene,
-    p: DVec3,
-    lobe: &Lobe,
-    skip: Option<u32>,
-    mis: bool,
-    s: &mut Sampler,
-    rays: &mut u64,
-) -> Rgb {
-    delta_lights(scene, p, lobe, skip, rays)
-        + distant_nee(scene, p, lobe, skip, mis, s, rays)
-        + emitter_nee(scene, p, lobe, skip, mis, s, rays)
+/// The delta lights visible from `x` (suns with a cone taken at its centre), and the
+/// shadow rays this cost.
+pub fn gather_direct(scene: &Scene, x: DVec3) -> (Vec<DirectLight<D3>>, u64) {
+    let mut out = Vec::new();
+    let mut rays = 0;
+    for l in &scene.point_lights {
+        let d = l.position - x;
+        let r = d.length();
+        if r == 0.0 {
+            continue;
+        }
+        rays += 1;
+        if !scene.occluded(x, d / r, r, None) {
+            out.push(DirectLight::Point {
+                position: l.position,
+                intensity: l.intensity,
+                transmittance: scene.transmittance(x, d / r, r),
+            });
+        }
+    }
+    for sun in &scene.suns {
+        let w = sun.to_sun;
+        rays += 1;
+        if scene.occluded(x, w, f64::INFINITY, None) {
+            continue;
+        }
+        let depth_at = |p: DVec3| {
+            scene
+                .medium
+                .as_ref()
+                .map_or(0.0, |m| m.length_inside(p, w, scene.world_exit(p, w)))
+        };
+        // The depth is piecewise linear in x: central differences are exact off the
+        // box's edges.
+        let h = 1e-6 * scene.scale;
+        let depth_grad = DVec3::new(
+            depth_at(x + DVec3::X * h) - depth_at(x - DVec3::X * h),
+            depth_at(x + DVec3::Y * h) - depth_at(x - DVec3::Y * h),
+            depth_at(x + DVec3::Z * h) - depth_at(x - DVec3::Z * h),
+        ) / (2.0 * h);
+        out.push(DirectLight::Directional {
+            to_light: w,
+            irradiance: sun.irradiance,
+            depth: depth_at(x),
+            depth_grad,
+            transmittance: transmittance_to_infinity(scene, x, w),
+        });
+    }
+    (out, rays)
 }

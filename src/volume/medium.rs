@@ -3,14 +3,10 @@
 //! Scene parameters (`scene_desc::MediumDesc`): `sigma_a`, `sigma_s` (m⁻¹, RGB or
 //! scalar), `g` (Henyey–Greenstein, in (−1, 1)), `region` ("everywhere" or a box).
 //!
-//! As in 2D (`flatland::medium`), one routine gives the piece of a ray inside the
-//! region and both free-flight sampling and transmittance use it; chromatic media
-//! draw one channel per flight and weight by the balance heuristic over channels.
+//! The medium itself is the pipeline's ([`crate::pipeline::medium`]); this module
+//! gives it its 3D region.
 
-use crate::core::color::Rgb;
-use crate::core::phase::Hg3;
-use crate::core::rng::Sampler;
-use crate::core::transmittance::transmittance;
+use crate::core::space::D3;
 use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -19,31 +15,14 @@ pub enum Region {
     Box { min: DVec3, max: DVec3 },
 }
 
-#[derive(Clone, Debug, PartialEq)]
-pub struct Medium {
-    pub sigma_a: Rgb,
-    pub sigma_s: Rgb,
-    pub sigma_t: Rgb,
-    pub phase: Hg3,
-    pub region: Region,
-}
+/// A homogeneous medium in 3D.
+pub type Medium = crate::pipeline::medium::Medium<D3, Region>;
 
-pub use crate::core::free_flight::Flight;
+impl crate::pipeline::medium::Region<D3> for Region {
+    type Pieces = Option<(f64, f64)>;
 
-impl Medium {
-    pub fn new(sigma_a: Rgb, sigma_s: Rgb, g: f64, region: Region) -> Self {
-        let sigma_t = sigma_a + sigma_s;
-        Medium {
-            sigma_a,
-            sigma_s,
-            sigma_t,
-            phase: Hg3::new(g),
-            region,
-        }
-    }
-
-    pub fn contains(&self, p: DVec3) -> bool {
-        match self.region {
+    fn contains(&self, p: DVec3) -> bool {
+        match *self {
             Region::Everywhere => true,
             Region::Box { min, max } => p.cmpge(min).all() && p.cmple(max).all(),
         }
@@ -51,8 +30,8 @@ impl Medium {
 
     /// The piece [t0, t1] of o + t·d, 0 ≤ t ≤ t_max, inside the region (None if empty).
     #[inline]
-    pub fn interval(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
-        match self.region {
+    fn pieces(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
+        match *self {
             Region::Everywhere => Some((0.0, t_max)),
             Region::Box { min, max } => {
                 let (mut t0, mut t1) = (0.0f64, t_max);
@@ -72,24 +51,16 @@ impl Medium {
             }
         }
     }
-
-    pub fn length_inside(&self, o: DVec3, d: DVec3, t_max: f64) -> f64 {
-        self.interval(o, d, t_max).map_or(0.0, |(a, b)| b - a)
-    }
-
-    pub fn transmittance(&self, o: DVec3, d: DVec3, t_max: f64) -> Rgb {
-        transmittance(self.sigma_t, self.length_inside(o, d, t_max))
-    }
-
-    /// Sample the distance to the next real scattering event before `t_max`.
-    pub fn sample_flight(&self, o: DVec3, d: DVec3, t_max: f64, s: &mut Sampler) -> Flight {
-        crate::core::free_flight::sample_flight(self.sigma_t, self.sigma_s, self.interval(o, d, t_max), s)
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::color::Rgb;
+    use crate::core::free_flight::Flight;
+    use crate::core::rng::Sampler;
+    use crate::core::transmittance::transmittance;
+    use crate::pipeline::medium::Region as _;
 
     #[test]
     fn box_interval() {
@@ -102,11 +73,20 @@ mod tests {
                 max: DVec3::splat(2.0),
             },
         );
-        assert_eq!(m.interval(DVec3::new(-1.0, 1.0, 1.0), DVec3::X, 10.0), Some((1.0, 3.0)));
-        assert_eq!(m.interval(DVec3::new(1.0, 1.0, 1.0), DVec3::X, 0.5), Some((0.0, 0.5)));
-        assert_eq!(m.interval(DVec3::new(-1.0, 3.0, 1.0), DVec3::X, 10.0), None);
+        assert_eq!(
+            m.region.pieces(DVec3::new(-1.0, 1.0, 1.0), DVec3::X, 10.0),
+            Some((1.0, 3.0))
+        );
+        assert_eq!(
+            m.region.pieces(DVec3::new(1.0, 1.0, 1.0), DVec3::X, 0.5),
+            Some((0.0, 0.5))
+        );
+        assert_eq!(m.region.pieces(DVec3::new(-1.0, 3.0, 1.0), DVec3::X, 10.0), None);
         // On a face, travelling along it: inside (closed box).
-        assert_eq!(m.interval(DVec3::new(-1.0, 0.0, 1.0), DVec3::X, 10.0), Some((1.0, 3.0)));
+        assert_eq!(
+            m.region.pieces(DVec3::new(-1.0, 0.0, 1.0), DVec3::X, 10.0),
+            Some((1.0, 3.0))
+        );
     }
 
     /// Chromatic free flight: pass weights are unbiased for each channel.

@@ -2,6 +2,8 @@
 //! triangles), boxes (twelve, optionally rotated about y) and OBJ meshes (tobj).
 //! Every triangle keeps the index of the shape it came from (its material).
 
+use crate::core::space::D3;
+use crate::pipeline::bvh::Primitive;
 use glam::{DMat3, DVec3};
 use std::path::Path;
 
@@ -19,13 +21,19 @@ pub struct Triangle {
     pub shape: u32,
 }
 
-/// A ray–triangle intersection.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    pub t: f64,
-    pub tri: u32,
-    pub u: f64,
-    pub v: f64,
+/// A ray–triangle intersection (`prim` is the triangle).
+pub use crate::pipeline::world::Hit;
+
+impl Primitive<D3> for Triangle {
+    fn bounds(&self) -> (DVec3, DVec3) {
+        let [a, b, c] = self.vertices();
+        (a.min(b).min(c), a.max(b).max(c))
+    }
+
+    #[inline]
+    fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
+        Triangle::intersect(self, o, d, t_min, t_max)
+    }
 }
 
 impl Triangle {

@@ -6,14 +6,16 @@
 //! the direct part sampled at the point) or is path traced. Sharing the camera rays,
 //! march points and surface samples, the two differ only by the cache's error.
 
-use super::cached::{CachedRenderParams, RadianceCache, sees};
+use super::cached::{CachedRenderParams, RadianceCache};
 use super::camera_march::CameraRay;
-use super::lights::{Lobe, direct_part, escaped_radiance};
+use super::lights::Lobe;
 use super::render::{Rendered, camera};
 use super::scene::Scene;
-use super::transport::{radiance_leaving_hit, sample_lobe};
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::{Sampler, mix64};
+use crate::pipeline::path::{radiance_leaving, sample_at};
+use crate::pipeline::placement::interpolate;
+use crate::pipeline::world::World;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -40,9 +42,8 @@ pub fn reconstruct(
     // Each row's clone of the closure has its own scratch buffer.
     let mut scratch: Vec<(usize, f64)> = Vec::new();
     march_image(scene, params, progress, move |p, lobe, sigma_s, s, rays| {
-        let direct = direct_part(scene, p, lobe, s, rays) * sigma_s;
-        let cached = cache.interpolate_where(p, second_order, &mut scratch, |x| sees(scene, x, p, rays));
-        cached.map(|c| direct + c.max(Rgb::ZERO))
+        let direct = scene.direct_part(p, lobe, s, rays) * sigma_s;
+        interpolate(scene, cache, p, second_order, &mut scratch, rays).map(|c| direct + c)
     })
 }
 
@@ -65,7 +66,7 @@ pub fn march_reference(
         let mut s = Sampler::new(path_seed, point);
         let mut sum = Rgb::ZERO;
         for _ in 0..paths {
-            sum += sample_lobe(scene, p, lobe, None, &params.image.settings, &mut s, rays);
+            sum += sample_at(scene, p, lobe, None, Rgb::ONE, &params.image.settings, &mut s, rays).total();
         }
         Some(sum * sigma_s / paths as f64)
     })
@@ -113,15 +114,15 @@ where
                         * match &ray.hit {
                             Some(hit) => {
                                 let paths = params.surface_paths;
-                                radiance_leaving_hit(scene, hit, ray.dir, paths, &ip.settings, &mut s, &mut rays).2
+                                radiance_leaving(scene, hit, ray.dir, paths, &ip.settings, &mut s, &mut rays).1
                             }
-                            None => escaped_radiance(scene, ray.dir, None),
+                            None => scene.escaped(ray.dir, None),
                         };
                     let mut medium = Rgb::ZERO;
                     if let Some(m) = &scene.medium {
                         let dt = ray.step(params.march_step);
                         let lobe = Lobe::Phase {
-                            hg: m.phase,
+                            phase: m.phase,
                             travel: ray.dir,
                         };
                         for (_, t) in ray.march(params.march_step) {

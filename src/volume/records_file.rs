@@ -123,8 +123,7 @@ pub fn scene_hash(scene: &Scene) -> String {
 
 impl RecordsFile {
     pub fn from_placement(scene: &Scene, params: &CachedRenderParams, method: CacheMethod, p: &Placement) -> Self {
-        let records = p
-            .cache
+        let records = p.caches[0]
             .records()
             .iter()
             .map(|r| StoredRecord {

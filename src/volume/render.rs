@@ -9,9 +9,10 @@
 
 use super::camera::Camera;
 use super::scene::Scene;
-use super::transport::{Settings, radiance_path_split};
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::Sampler;
+use crate::pipeline::path::{FirstEvent, Settings, radiance_path};
+use crate::pipeline::world::World;
 use crate::progress::{Cancelled, Progress};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -139,7 +140,7 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
                     for k in k0..k1 {
                         let mut s = Sampler::new2(params.seed, item, k as u64);
                         let p = DVec2::new(i as f64 + s.next_f64(), j as f64 + s.next_f64());
-                        let (l, scattered) = radiance_path_split(
+                        let (l, first) = radiance_path(
                             scene,
                             cam.position,
                             cam.direction(p),
@@ -150,7 +151,7 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
                             &mut r,
                         );
                         let y = luminance(l);
-                        let m = if scattered { l } else { Rgb::ZERO };
+                        let m = if first == FirstEvent::Scatter { l } else { Rgb::ZERO };
                         *a = (a.0 + l, a.1 + y, a.2 + y * y, a.3 + m);
                     }
                 }

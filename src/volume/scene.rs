@@ -4,14 +4,19 @@
 //! [`Scene::from_json`] reject malformed JSON, unknown fields and invalid values with
 //! an error naming the file, the JSON path and the problem, never a panic.
 
-use super::bvh::{Aabb, Bvh};
 use super::camera::Camera;
+use super::lights::{self, Lobe};
 use super::medium::{Medium, Region};
 use super::mesh::{self, Hit, Triangle};
 use super::scene_desc::{LightDesc, RegionDesc, SceneDesc};
 use super::validate::{Problem, validate};
-use crate::core::color::{Rgb, luminance};
-pub use crate::flatland::scene::SceneError;
+use crate::core::color::Rgb;
+use crate::core::rng::Sampler;
+use crate::core::space::D3;
+use crate::pipeline::bvh::{Aabb, Geometry};
+use crate::pipeline::emitters::Emitters;
+use crate::pipeline::world::{DirectLight, SurfacePoint, World};
+pub use crate::scene_check::SceneError;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -60,19 +65,18 @@ pub struct Scene {
     pub desc: SceneDesc,
     pub source: String,
     pub camera: Camera,
-    pub triangles: Vec<Triangle>,
-    pub bvh: Bvh,
+    /// The scene's triangles and their BVH.
+    pub geometry: Geometry<D3, Triangle>,
     /// One per shape, indexed by `Triangle::shape`.
     pub surfaces: Vec<Surface>,
     pub point_lights: Vec<PointLight>,
     pub suns: Vec<Sun>,
     /// Total constant sky radiance (zero: no sky).
     pub sky: Rgb,
-    /// Emissive triangles and the CDF used to pick one for NEE (∝ luminance × area).
-    pub emitters: Vec<u32>,
-    pub emitter_cdf: Vec<f64>,
+    /// Emissive triangles, picked for NEE ∝ luminance × area.
+    pub emitters: Emitters,
     pub medium: Option<Medium>,
-    pub bounds: Aabb,
+    pub bounds: Aabb<D3>,
     /// Length scale: diagonal of everything placed in the scene.
     pub scale: f64,
 }
@@ -143,7 +147,7 @@ impl Scene {
                 two_sided: s.two_sided,
             });
         }
-        let mut bounds = Aabb::EMPTY;
+        let mut bounds = Aabb::<D3>::empty();
         triangles.iter().flat_map(|t| t.vertices()).for_each(|p| bounds.grow(p));
         bounds.grow(v(desc.camera.position));
         let (mut point_lights, mut suns, mut sky) = (Vec::new(), Vec::new(), Rgb::ZERO);
@@ -185,25 +189,10 @@ impl Scene {
         });
         // A medium that neither scatters nor absorbs costs nothing: drop it.
         let medium = medium.filter(|m| m.sigma_t.max_element() > 0.0);
-        let emitters: Vec<u32> = (0..triangles.len() as u32)
-            .filter(|&i| surfaces[triangles[i as usize].shape as usize].emission.max_element() > 0.0)
-            .collect();
-        let weights: Vec<f64> = emitters
-            .iter()
-            .map(|&i| {
-                let t = &triangles[i as usize];
-                let e = surfaces[t.shape as usize].emission;
-                luminance(e).max(1e-3 * e.max_element()) * t.area
-            })
-            .collect();
-        let total: f64 = weights.iter().sum();
-        let emitter_cdf = weights
-            .iter()
-            .scan(0.0, |acc, w| {
-                *acc += w / total;
-                Some(*acc)
-            })
-            .collect();
+        let emitters = Emitters::new(triangles.iter().enumerate().filter_map(|(i, t)| {
+            let e = surfaces[t.shape as usize].emission;
+            (e.max_element() > 0.0).then_some((i as u32, e, t.area))
+        }));
         let r = &desc.render;
         let camera = Camera::new(
             v(desc.camera.position),
@@ -215,17 +204,15 @@ impl Scene {
         );
         let scale = (bounds.max - bounds.min).length().max(1e-6);
         Ok(Scene {
-            bvh: Bvh::build(&triangles),
+            geometry: Geometry::new(triangles),
             desc,
             source: file.to_string(),
             camera,
-            triangles,
             surfaces,
             point_lights,
             suns,
             sky,
             emitters,
-            emitter_cdf,
             medium,
             bounds,
             scale,
@@ -238,22 +225,33 @@ impl Scene {
         1e-9 * self.scale
     }
 
-    #[inline]
-    pub fn closest_hit(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> Option<Hit> {
-        self.bvh.closest_hit(&self.triangles, o, d, self.t_min(), t_max, skip)
+    /// The material of triangle `tri`.
+    pub fn material(&self, tri: u32) -> &Surface {
+        &self.surfaces[self.geometry.prims[tri as usize].shape as usize]
+    }
+}
+
+impl World for Scene {
+    type S = D3;
+    type Region = Region;
+
+    fn scale(&self) -> f64 {
+        self.scale
     }
 
     #[inline]
-    pub fn occluded(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> bool {
-        self.bvh.occluded(&self.triangles, o, d, self.t_min(), t_max, skip)
+    fn closest_hit(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> Option<Hit> {
+        let (t, prim, u, v) = self.geometry.closest_hit(o, d, self.t_min(), t_max, skip)?;
+        Some(Hit { t, prim, u, v })
     }
 
-    pub fn surface(&self, tri: u32) -> &Surface {
-        &self.surfaces[self.triangles[tri as usize].shape as usize]
+    #[inline]
+    fn occluded(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> bool {
+        self.geometry.occluded(o, d, self.t_min(), t_max, skip)
     }
 
     /// Distance along p + t·d to the world sphere (0 outside it).
-    pub fn world_exit(&self, p: DVec3, d: DVec3) -> f64 {
+    fn world_exit(&self, p: DVec3, d: DVec3) -> f64 {
         let c = 0.5 * (self.bounds.min + self.bounds.max);
         let r = WORLD_RADIUS * self.scale;
         let o = p - c;
@@ -262,13 +260,51 @@ impl Scene {
         if disc <= 0.0 { 0.0 } else { (-b + disc.sqrt()).max(0.0) }
     }
 
-    /// Probability of picking emitter number `k` (index into `emitters`).
-    pub fn emitter_probability(&self, k: usize) -> f64 {
-        self.emitter_cdf[k] - if k == 0 { 0.0 } else { self.emitter_cdf[k - 1] }
+    fn medium(&self) -> Option<&Medium> {
+        self.medium.as_ref()
     }
 
-    pub fn medium_at(&self, p: DVec3) -> Option<&Medium> {
-        self.medium.as_ref().filter(|m| m.contains(p))
+    fn surface(&self, hit: &Hit, dir: DVec3) -> SurfacePoint<D3> {
+        let tri = &self.geometry.prims[hit.prim as usize];
+        let surf = &self.surfaces[tri.shape as usize];
+        let facing = tri.normal.dot(dir) < 0.0;
+        SurfacePoint {
+            point: tri.point_at(hit.u, hit.v),
+            normal: if facing { tri.normal } else { -tri.normal },
+            active: facing || surf.two_sided,
+            emission: surf.emission,
+            reflectance: surf.reflectance,
+        }
+    }
+
+    fn delta_lights(&self, p: DVec3, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
+        lights::delta_lights(self, p, lobe, skip, rays)
+    }
+
+    fn sampled_nee(&self, p: DVec3, lobe: &Lobe, skip: Option<u32>, mis: bool, s: &mut Sampler, rays: &mut u64) -> Rgb {
+        lights::distant_nee(self, p, lobe, skip, mis, s, rays) + lights::emitter_nee(self, p, lobe, skip, mis, s, rays)
+    }
+
+    fn emitter_pdf(&self, from: DVec3, prim: u32, y: DVec3) -> f64 {
+        lights::emitter_pdf(self, from, prim, y)
+    }
+
+    fn escaped(&self, w: DVec3, lobe_pdf: Option<f64>) -> Rgb {
+        lights::escaped_radiance(self, w, lobe_pdf)
+    }
+
+    /// The sky: sun cones are far narrower than a probe ray's solid angle, so they
+    /// are evaluated with the direct part instead.
+    fn escaped_probe(&self, _w: DVec3) -> Rgb {
+        self.sky
+    }
+
+    fn direct_part(&self, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: &mut u64) -> Rgb {
+        lights::direct_part(self, p, lobe, s, rays)
+    }
+
+    fn direct_lights(&self, x: DVec3) -> (Vec<DirectLight<D3>>, u64) {
+        lights::gather_direct(self, x)
     }
 }
 

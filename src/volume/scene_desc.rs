@@ -28,7 +28,7 @@
 //! }
 //! ```
 
-pub use crate::flatland::scene_desc::Color;
+pub use crate::core::color::Color;
 use serde::{Deserialize, Serialize};
 
 /// A whole 3D scene file.

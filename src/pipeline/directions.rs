@@ -1,6 +1,10 @@
-//! Stratified directions over the unit sphere and their triangulation (issue 6 §4).
+//! Stratified direction sets and their neighbours (theory.md §3, §5): the circle's
+//! N equal arcs (2D), and a spherical Fibonacci set with its triangulation (3D).
 //!
-//! Directions: a spherical Fibonacci set, z_k = 1 − 2(k + ½ + j·(ξ − ½))/N (equal-area
+//! Circle: θ_k = 2π(k + ½ + j·(ξ_k − ½))/N with jitter amount j ∈ [0, 1] and ξ_k drawn
+//! per (seed, k); neighbours are (k, k + 1).
+//!
+//! Sphere: z_k = 1 − 2(k + ½ + j·(ξ − ½))/N (equal-area
 //! bands in z), φ_k = 2π frac(k/Φ) + j·(ξ' − ½)·2π/√N, with jitter amount j ∈ [0, 1]
 //! drawn per (seed, k).
 //!
@@ -15,19 +19,22 @@
 //! ((v1 − v0) × (v2 − v0) points away from the centre).
 
 use crate::core::rng::Sampler;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::f64::consts::TAU;
 
-/// Directions and outward-oriented triangles (indices into `dirs`).
-#[derive(Clone, Debug)]
-pub struct SphereMesh {
-    pub dirs: Vec<DVec3>,
-    pub triangles: Vec<[u32; 3]>,
+/// N stratified directions on the circle (see the module docs).
+pub fn circle(n: usize, jitter: f64, seed: u64) -> Vec<DVec2> {
+    (0..n)
+        .map(|k| {
+            let xi = Sampler::new2(seed, 0x5f3e_7e2e, k as u64).next_f64();
+            DVec2::from_angle(TAU * (k as f64 + 0.5 + jitter * (xi - 0.5)) / n as f64)
+        })
+        .collect()
 }
 
 /// N stratified unit directions (spherical Fibonacci, jittered by `jitter` ∈ [0, 1]).
-pub fn fibonacci_directions(n: usize, jitter: f64, seed: u64) -> Vec<DVec3> {
+pub fn fibonacci(n: usize, jitter: f64, seed: u64) -> Vec<DVec3> {
     let golden = (1.0 + 5f64.sqrt()) * 0.5;
     let nf = n as f64;
     let dphi = TAU / nf.sqrt();
@@ -106,13 +113,6 @@ pub fn triangulate(dirs: &[DVec3]) -> Result<Vec<[u32; 3]>, SphereError> {
     Ok(tris)
 }
 
-/// Directions and their triangulation.
-pub fn sphere_mesh(n: usize, jitter: f64, seed: u64) -> Result<SphereMesh, SphereError> {
-    let dirs = fibonacci_directions(n, jitter, seed);
-    let triangles = triangulate(&dirs)?;
-    Ok(SphereMesh { dirs, triangles })
-}
-
 /// Signed solid angle of the spherical triangle of unit vectors (a, b, c) (Van
 /// Oosterom–Strackee), positive when counter-clockwise seen from outside.
 pub fn solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
@@ -128,8 +128,18 @@ mod tests {
     use std::collections::HashMap;
     use std::f64::consts::PI;
 
+    struct Mesh {
+        dirs: Vec<DVec3>,
+        triangles: Vec<[u32; 3]>,
+    }
+
     fn check(n: usize, jitter: f64, seed: u64) {
-        let m = sphere_mesh(n, jitter, seed).unwrap();
+        let dirs = fibonacci(n, jitter, seed);
+        let m = (triangulate(&dirs).unwrap(), dirs);
+        let m = Mesh {
+            triangles: m.0,
+            dirs: m.1,
+        };
         // Coverage: every triangle positively oriented, solid angles summing to 4π.
         let mut sum = 0.0;
         let mut min: f64 = f64::INFINITY;
@@ -196,7 +206,7 @@ mod tests {
 
     #[test]
     fn directions_are_unit_and_stratified() {
-        let d = fibonacci_directions(4096, 1.0, 9);
+        let d = fibonacci(4096, 1.0, 9);
         assert!(d.iter().all(|v| (v.length() - 1.0).abs() < 1e-12));
         // Equal-area bands: mean z near zero, each hemisphere half the points.
         let up = d.iter().filter(|v| v.z > 0.0).count();

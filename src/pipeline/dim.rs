@@ -1,0 +1,270 @@
+//! What the method needs of a dimension beyond the core's vector algebra
+//! ([`Space`]): the phase function and Lambertian sampling of that dimension, its
+//! direction sets (a stratified circle with its neighbours, a spherical Fibonacci set
+//! with its spade triangulation) and the proxy's simplices (a segment in 2D, a
+//! triangle in 3D) with their form factors. Implemented by the markers
+//! [`D2`] and [`D3`]; everything above is written once over `S: Dim`.
+//!
+//! Random numbers: each sampling routine draws what its dimension needs (one number
+//! for a direction on the circle, two on the sphere), so a path's stream is the same
+//! whichever code asks for the direction.
+
+use super::directions;
+use crate::core::element::segment_form_factor;
+use crate::core::phase::{Hg2, Hg3};
+use crate::core::rng::Sampler;
+use crate::core::space::{D2, D3, Space};
+use crate::core::taylor::Taylor2;
+use crate::core::triangle::triangle_form_factor;
+use glam::{DVec2, DVec3};
+use serde::Serialize;
+use std::f64::consts::{FRAC_1_PI, TAU};
+use std::fmt::Debug;
+
+/// What a [`Dim::Simplex`] can hold.
+pub trait Element: Copy + Debug + PartialEq + Send + Sync + Serialize {}
+impl<T: Copy + Debug + PartialEq + Send + Sync + Serialize> Element for T {}
+
+/// A dimension the method runs in.
+pub trait Dim: Space<Vec: Serialize + Default> {
+    /// Directions per cache record by default: the angular resolution at which more
+    /// rays stop lowering a record's error at equal cost (see `ProbeSettings`).
+    const PROBE_RAYS: usize;
+    /// The Henyey–Greenstein phase function of this dimension.
+    type Phase: Copy + Debug + PartialEq + Send + Sync;
+    /// `DIM` values: the vertices of a proxy element (segment or triangle), or the
+    /// indices of the directions it spans.
+    type Simplex<T: Element>: Element + AsRef<[T]> + AsMut<[T]>;
+
+    fn simplex<T: Element>(f: impl FnMut(usize) -> T) -> Self::Simplex<T>;
+
+    fn phase(g: f64) -> Self::Phase;
+    fn phase_g(p: &Self::Phase) -> f64;
+    /// Phase value per unit measure for travel direction `travel` scattered into `w`.
+    fn phase_eval(p: &Self::Phase, travel: Self::Vec, w: Self::Vec) -> f64;
+    /// Exact sampling of the scattered direction (pdf = `phase_eval`).
+    fn phase_sample(p: &Self::Phase, travel: Self::Vec, s: &mut Sampler) -> Self::Vec;
+
+    /// Lambertian BRDF factor per unit reflectance: cos/2 (2D) or cos/π (3D).
+    fn lambert(cos: f64) -> f64;
+    /// A cosine-distributed direction around the unit `normal`, and its pdf.
+    fn sample_cosine(normal: Self::Vec, s: &mut Sampler) -> (Self::Vec, f64);
+    /// A direction uniform over the circle or sphere.
+    fn sample_uniform(s: &mut Sampler) -> Self::Vec;
+
+    /// Componentwise minimum, maximum, product and reciprocal (for bounding boxes).
+    fn min(a: Self::Vec, b: Self::Vec) -> Self::Vec;
+    fn max(a: Self::Vec, b: Self::Vec) -> Self::Vec;
+    fn mul(a: Self::Vec, b: Self::Vec) -> Self::Vec;
+    fn recip(a: Self::Vec) -> Self::Vec;
+    fn splat(v: f64) -> Self::Vec;
+    fn min_element(a: Self::Vec) -> f64;
+    fn max_element(a: Self::Vec) -> f64;
+    fn any_nan(a: Self::Vec) -> bool;
+    /// Half the boundary measure of a box of extent `e`: the surface-area heuristic's
+    /// cost of a node (half perimeter in 2D, half area in 3D).
+    fn half_boundary(e: Self::Vec) -> f64;
+
+    /// `n` stratified unit directions, jittered in their strata by `jitter` ∈ [0, 1]
+    /// from streams of `seed`.
+    fn directions(n: usize, jitter: f64, seed: u64) -> Vec<Self::Vec>;
+    /// The simplices joining neighbouring directions (neighbouring rays in 2D, the
+    /// triangulation of the sphere in 3D), counter-clockwise / outward.
+    fn neighbours(dirs: &[Self::Vec]) -> Vec<Self::Simplex<u32>>;
+    /// The angle (solid angle) spanned by unit directions.
+    fn direction_measure(dirs: Self::Simplex<Self::Vec>) -> f64;
+    /// The vertices reordered so that their form factor seen from `x` is positive.
+    fn orient(x: Self::Vec, v: Self::Simplex<Self::Vec>) -> Self::Simplex<Self::Vec>;
+    /// The angle (solid angle) a segment (triangle) subtends at `x`, with its
+    /// gradient and Hessian in x (theory.md §5).
+    fn form_factor(v: Self::Simplex<Self::Vec>, x: Self::Vec) -> Taylor2<Self>;
+}
+
+impl Dim for D2 {
+    const PROBE_RAYS: usize = 1024;
+    type Phase = Hg2;
+    type Simplex<T: Element> = [T; 2];
+
+    fn simplex<T: Element>(f: impl FnMut(usize) -> T) -> [T; 2] {
+        std::array::from_fn(f)
+    }
+    fn phase(g: f64) -> Hg2 {
+        Hg2::new(g)
+    }
+    fn phase_g(p: &Hg2) -> f64 {
+        p.g
+    }
+    #[inline]
+    fn phase_eval(p: &Hg2, travel: DVec2, w: DVec2) -> f64 {
+        p.eval(travel, w)
+    }
+    #[inline]
+    fn phase_sample(p: &Hg2, travel: DVec2, s: &mut Sampler) -> DVec2 {
+        p.sample(travel, s.next_f64())
+    }
+    #[inline]
+    fn lambert(cos: f64) -> f64 {
+        0.5 * cos
+    }
+    #[inline]
+    fn sample_cosine(normal: DVec2, s: &mut Sampler) -> (DVec2, f64) {
+        // pdf cosθ/2 on the half circle: sinθ uniform in [−1, 1].
+        let sin_t = 2.0 * s.next_f64() - 1.0;
+        let cos_t = (1.0 - sin_t * sin_t).max(0.0).sqrt();
+        (normal * cos_t + normal.perp() * sin_t, 0.5 * cos_t)
+    }
+    fn sample_uniform(s: &mut Sampler) -> DVec2 {
+        DVec2::from_angle(TAU * s.next_f64())
+    }
+    #[inline]
+    fn min(a: DVec2, b: DVec2) -> DVec2 {
+        a.min(b)
+    }
+    #[inline]
+    fn max(a: DVec2, b: DVec2) -> DVec2 {
+        a.max(b)
+    }
+    #[inline]
+    fn mul(a: DVec2, b: DVec2) -> DVec2 {
+        a * b
+    }
+    #[inline]
+    fn recip(a: DVec2) -> DVec2 {
+        a.recip()
+    }
+    #[inline]
+    fn splat(v: f64) -> DVec2 {
+        DVec2::splat(v)
+    }
+    #[inline]
+    fn min_element(a: DVec2) -> f64 {
+        a.min_element()
+    }
+    #[inline]
+    fn max_element(a: DVec2) -> f64 {
+        a.max_element()
+    }
+    #[inline]
+    fn any_nan(a: DVec2) -> bool {
+        a.is_nan_mask().any()
+    }
+    fn half_boundary(e: DVec2) -> f64 {
+        e.x + e.y
+    }
+    fn directions(n: usize, jitter: f64, seed: u64) -> Vec<DVec2> {
+        directions::circle(n, jitter, seed)
+    }
+    fn neighbours(dirs: &[DVec2]) -> Vec<[u32; 2]> {
+        let n = dirs.len() as u32;
+        (0..n).map(|k| [k, (k + 1) % n]).collect()
+    }
+    fn direction_measure([a, b]: [DVec2; 2]) -> f64 {
+        a.perp_dot(b).atan2(a.dot(b)).abs()
+    }
+    fn orient(x: DVec2, [a, b]: [DVec2; 2]) -> [DVec2; 2] {
+        if (a - x).perp_dot(b - x) >= 0.0 { [a, b] } else { [b, a] }
+    }
+    fn form_factor([a, b]: [DVec2; 2], x: DVec2) -> Taylor2<D2> {
+        segment_form_factor(a, b, x)
+    }
+}
+
+impl Dim for D3 {
+    const PROBE_RAYS: usize = 4096;
+    type Phase = Hg3;
+    type Simplex<T: Element> = [T; 3];
+
+    fn simplex<T: Element>(f: impl FnMut(usize) -> T) -> [T; 3] {
+        std::array::from_fn(f)
+    }
+    fn phase(g: f64) -> Hg3 {
+        Hg3::new(g)
+    }
+    fn phase_g(p: &Hg3) -> f64 {
+        p.g
+    }
+    #[inline]
+    fn phase_eval(p: &Hg3, travel: DVec3, w: DVec3) -> f64 {
+        p.eval(travel, w)
+    }
+    #[inline]
+    fn phase_sample(p: &Hg3, travel: DVec3, s: &mut Sampler) -> DVec3 {
+        let (u1, u2) = (s.next_f64(), s.next_f64());
+        p.sample(travel, u1, u2)
+    }
+    #[inline]
+    fn lambert(cos: f64) -> f64 {
+        cos * FRAC_1_PI
+    }
+    #[inline]
+    fn sample_cosine(normal: DVec3, s: &mut Sampler) -> (DVec3, f64) {
+        // A uniform disc point lifted to the hemisphere.
+        let (u1, u2) = (s.next_f64(), s.next_f64());
+        let r = u1.sqrt();
+        let phi = TAU * u2;
+        let z = (1.0 - u1).max(0.0).sqrt();
+        let (t, b) = normal.any_orthonormal_pair();
+        let w = (t * (r * phi.cos()) + b * (r * phi.sin()) + normal * z).normalize();
+        (w, normal.dot(w).max(0.0) * FRAC_1_PI)
+    }
+    fn sample_uniform(s: &mut Sampler) -> DVec3 {
+        let (u1, u2) = (s.next_f64(), s.next_f64());
+        let z = 1.0 - 2.0 * u1;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        DVec3::new(r * (TAU * u2).cos(), r * (TAU * u2).sin(), z)
+    }
+    #[inline]
+    fn min(a: DVec3, b: DVec3) -> DVec3 {
+        a.min(b)
+    }
+    #[inline]
+    fn max(a: DVec3, b: DVec3) -> DVec3 {
+        a.max(b)
+    }
+    #[inline]
+    fn mul(a: DVec3, b: DVec3) -> DVec3 {
+        a * b
+    }
+    #[inline]
+    fn recip(a: DVec3) -> DVec3 {
+        a.recip()
+    }
+    #[inline]
+    fn splat(v: f64) -> DVec3 {
+        DVec3::splat(v)
+    }
+    #[inline]
+    fn min_element(a: DVec3) -> f64 {
+        a.min_element()
+    }
+    #[inline]
+    fn max_element(a: DVec3) -> f64 {
+        a.max_element()
+    }
+    #[inline]
+    fn any_nan(a: DVec3) -> bool {
+        a.is_nan_mask().any()
+    }
+    fn half_boundary(e: DVec3) -> f64 {
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+    fn directions(n: usize, jitter: f64, seed: u64) -> Vec<DVec3> {
+        directions::fibonacci(n, jitter, seed)
+    }
+    fn neighbours(dirs: &[DVec3]) -> Vec<[u32; 3]> {
+        directions::triangulate(dirs).expect("stratified directions triangulate")
+    }
+    fn direction_measure([a, b, c]: [DVec3; 3]) -> f64 {
+        directions::solid_angle(a, b, c).abs()
+    }
+    fn orient(x: DVec3, [a, b, c]: [DVec3; 3]) -> [DVec3; 3] {
+        if (a - x).dot((b - a).cross(c - a)) >= 0.0 {
+            [a, b, c]
+        } else {
+            [a, c, b]
+        }
+    }
+    fn form_factor(v: [DVec3; 3], x: DVec3) -> Taylor2<D3> {
+        triangle_form_factor(v, x)
+    }
+}

@@ -1,0 +1,22 @@
+//! The method, once, generic over the dimension (`S: Dim`, on the core's `Space`):
+//! the scene as the method sees it ([`world::World`]), ray casting over primitives
+//! ([`bvh`]), path tracing ([`path`]), and the radiance-cache pipeline — a point's
+//! light field ([`probe`]) → occlusion-free proxy ([`proxy`]) → aware / unaware /
+//! reference derivatives ([`derivatives`]) → a record ([`record`]) → placement over
+//! a source of query points ([`placement`]). `flatland` (2D) and `volume` (3D)
+//! implement [`world::World`] and supply their query points; nothing here knows
+//! files, cameras or images.
+
+pub mod bvh;
+pub mod derivatives;
+pub mod dim;
+pub mod directions;
+pub mod emitters;
+pub mod lobe;
+pub mod medium;
+pub mod path;
+pub mod placement;
+pub mod probe;
+pub mod proxy;
+pub mod record;
+pub mod world;

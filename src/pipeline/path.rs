@@ -1,0 +1,430 @@
+//! Reference estimators: unidirectional volumetric path tracing, in any dimension.
+//!
+//! Quantities (theory.md §1–2) at a point x:
+//! - in-scattered radiance L_s(x, ω_o) = σ_s ∫ f(−ω·ω_o) L_i(x, ω) dω, split into
+//!   **direct** (delta lights at x), **single** (light arriving at x from surfaces
+//!   and the sky: emitters seen directly and light reflected by surfaces) and
+//!   **multiple** (light arriving at x from the medium itself);
+//! - fluence φ(x) = ∫ L_i(x, ω) dω, split the same way;
+//! - irradiance on a virtual sensor with normal n, ∫ L_i max(0, n·ω) dω (reflected
+//!   power);
+//! - the radiance L_i(x, ω) along one ray (camera pixels).
+//!
+//! Paths use free-flight sampling, NEE at every vertex (MIS with lobe sampling for
+//! lights with an extent) and Russian roulette. Each sample draws from its own
+//! stream derived from (seed, item, sample), so results do not depend on threads.
+
+use super::dim::Dim;
+use super::lobe::Lobe;
+use super::world::{Hit, SurfacePoint, VecOf, World};
+use crate::core::color::Rgb;
+use crate::core::free_flight::Flight;
+use crate::core::mis::power_heuristic;
+use crate::core::rng::Sampler;
+use serde::{Deserialize, Serialize};
+
+/// Path-tracing settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    /// Maximum number of path vertices after the start.
+    pub max_depth: u32,
+    /// Russian roulette starts at this vertex.
+    pub rr_depth: u32,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            max_depth: 1024,
+            rr_depth: 3,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    /// In-scattered radiance L_s(x, ω_o) (the cached quantity).
+    #[default]
+    Ls,
+    /// Fluence φ(x) = ∫ L_i dθ.
+    Fluence,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Part {
+    #[default]
+    All,
+    Direct,
+    Single,
+    Multiple,
+}
+
+/// A value split into the parts of theory.md §2.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Parts {
+    pub direct: Rgb,
+    pub single: Rgb,
+    pub multiple: Rgb,
+}
+
+impl Parts {
+    pub fn total(&self) -> Rgb {
+        self.direct + self.single + self.multiple
+    }
+
+    pub fn scaled(self, k: Rgb) -> Parts {
+        Parts {
+            direct: self.direct * k,
+            single: self.single * k,
+            multiple: self.multiple * k,
+        }
+    }
+
+    pub fn get(&self, part: Part) -> Rgb {
+        match part {
+            Part::All => self.total(),
+            Part::Direct => self.direct,
+            Part::Single => self.single,
+            Part::Multiple => self.multiple,
+        }
+    }
+
+    pub fn as_array(&self) -> [Rgb; 3] {
+        [self.direct, self.single, self.multiple]
+    }
+}
+
+/// What a path met first: this decides which part its light belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FirstEvent {
+    Scatter,
+    Surface,
+    Escape,
+}
+
+/// Radiance arriving at `start` back along the ray start + t·dir, and what the path
+/// met first. `skip` is the primitive `start` lies on; `lobe_pdf` the pdf with which
+/// `dir` was sampled at a vertex that also did NEE with MIS (None for camera rays
+/// and fixed directions).
+#[allow(clippy::too_many_arguments)] // the path state is spelled out
+pub fn radiance_path<W: World>(
+    world: &W,
+    start: VecOf<W>,
+    dir: VecOf<W>,
+    skip: Option<u32>,
+    lobe_pdf: Option<f64>,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> (Rgb, FirstEvent) {
+    let (mut p, mut dir, mut skip, mut pdf_prev) = (start, dir, skip, lobe_pdf);
+    let mut beta = Rgb::ONE;
+    let mut l = Rgb::ZERO;
+    let mut first = None;
+    let medium = world.medium();
+    for depth in 1..=settings.max_depth {
+        *rays += 1;
+        let hit = world.closest_hit(p, dir, f64::INFINITY, skip);
+        // An unbounded medium ends at the world sphere: paths leaving it escape, so a
+        // thin non-absorbing fog cannot keep a path scattering far away forever.
+        let s_max = hit.map_or_else(|| world.world_exit(p, dir), |h| h.t);
+        let flight = match medium {
+            Some(m) => m.sample_flight(p, dir, s_max, s),
+            None => Flight::Pass { weight: Rgb::ONE },
+        };
+        let lobe = match (flight, hit) {
+            (Flight::Scatter { t, weight }, _) => {
+                first.get_or_insert(FirstEvent::Scatter);
+                beta *= weight;
+                p += dir * t;
+                skip = None;
+                let m = medium.expect("scattering needs a medium");
+                Lobe::Phase {
+                    phase: m.phase,
+                    travel: dir,
+                }
+            }
+            (Flight::Pass { weight }, None) => {
+                first.get_or_insert(FirstEvent::Escape);
+                l += beta * weight * world.escaped(dir, pdf_prev);
+                break;
+            }
+            (Flight::Pass { weight }, Some(h)) => {
+                first.get_or_insert(FirstEvent::Surface);
+                beta *= weight;
+                let sp = world.surface(&h, dir);
+                if !sp.active {
+                    break;
+                }
+                if sp.emission != Rgb::ZERO {
+                    let w = pdf_prev.map_or(1.0, |pb| power_heuristic(pb, world.emitter_pdf(p, h.prim, sp.point)));
+                    l += beta * sp.emission * w;
+                }
+                if sp.reflectance == Rgb::ZERO {
+                    break;
+                }
+                p = sp.point;
+                skip = Some(h.prim);
+                Lobe::Lambert {
+                    normal: sp.normal,
+                    reflectance: sp.reflectance,
+                }
+            }
+        };
+        let last = depth == settings.max_depth;
+        l += beta * world.nee(p, &lobe, skip, !last, s, rays);
+        if last {
+            break;
+        }
+        let (w, weight, pdf) = lobe.sample(s);
+        beta *= weight;
+        dir = w;
+        pdf_prev = Some(pdf);
+        if depth >= settings.rr_depth && !crate::core::roulette::survives(&mut beta, s) {
+            break;
+        }
+        if beta == Rgb::ZERO || !beta.is_finite() {
+            break;
+        }
+    }
+    (l, first.unwrap_or(FirstEvent::Escape))
+}
+
+/// One sample of ∫ value(ω) L_i(x, ω) dω at `x` for a lobe, times `prefactor`, in
+/// parts: delta lights, NEE to lights with an extent and one lobe-sampled path
+/// (MIS-combined). `skip` is the primitive `x` lies on, if any.
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
+pub fn sample_at<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    lobe: &Lobe<W::S>,
+    skip: Option<u32>,
+    prefactor: Rgb,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Parts {
+    let mut parts = Parts {
+        direct: world.delta_lights(x, lobe, skip, rays),
+        single: world.sampled_nee(x, lobe, skip, true, s, rays),
+        multiple: Rgb::ZERO,
+    };
+    let (w, weight, pdf) = lobe.sample(s);
+    if weight != Rgb::ZERO {
+        let (l, first) = radiance_path(world, x, w, skip, Some(pdf), settings, s, rays);
+        match first {
+            FirstEvent::Scatter => parts.multiple += weight * l,
+            FirstEvent::Surface | FirstEvent::Escape => parts.single += weight * l,
+        }
+    }
+    parts.scaled(prefactor)
+}
+
+/// The radiance leaving the surface point of `hit` back along `dir` (the ray that
+/// found it): emission on an active side plus `paths` samples of the reflected
+/// light (NEE and a BRDF-sampled path each); zero on the inactive back of a
+/// one-sided surface.
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
+pub fn radiance_leaving<W: World>(
+    world: &W,
+    hit: &Hit,
+    dir: VecOf<W>,
+    paths: u32,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> (SurfacePoint<W::S>, Rgb) {
+    let sp = world.surface(hit, dir);
+    if !sp.active {
+        return (sp, Rgb::ZERO);
+    }
+    let mut l = sp.emission;
+    if sp.reflectance != Rgb::ZERO {
+        let lobe = Lobe::Lambert {
+            normal: sp.normal,
+            reflectance: sp.reflectance,
+        };
+        let paths = paths.max(1);
+        let mut sum = Rgb::ZERO;
+        for _ in 0..paths {
+            sum += sample_at(world, sp.point, &lobe, Some(hit.prim), Rgb::ONE, settings, s, rays).total();
+        }
+        l += sum / paths as f64;
+    }
+    (sp, l)
+}
+
+/// What to estimate at a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Query<S: Dim> {
+    /// L_s(x, ω_o), zero outside the medium.
+    InScattered {
+        omega_o: S::Vec,
+    },
+    Fluence,
+    /// ∫ L_i(x, ω) max(0, n·ω) dω on a virtual sensor with unit normal n.
+    Irradiance {
+        normal: S::Vec,
+    },
+}
+
+impl<S: Dim> Query<S> {
+    pub fn from_quantity(q: Quantity, omega_o: S::Vec) -> Self {
+        match q {
+            Quantity::Ls => Query::InScattered { omega_o },
+            Quantity::Fluence => Query::Fluence,
+        }
+    }
+
+    /// Is the query defined at `x`? (L_s needs a medium.)
+    pub fn defined_at<W: World<S = S>>(&self, world: &W, x: S::Vec) -> bool {
+        match self {
+            Query::InScattered { .. } => world.medium_at(x).is_some(),
+            _ => true,
+        }
+    }
+}
+
+/// One sample of the query at `x`.
+pub fn sample_query<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    q: &Query<W::S>,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Parts {
+    match *q {
+        Query::InScattered { omega_o } => match world.medium_at(x) {
+            Some(m) => {
+                let lobe = Lobe::Phase {
+                    phase: m.phase,
+                    travel: -omega_o,
+                };
+                sample_at(world, x, &lobe, None, m.sigma_s, settings, s, rays)
+            }
+            None => Parts::default(),
+        },
+        Query::Fluence => sample_at(world, x, &Lobe::Uniform, None, Rgb::ONE, settings, s, rays),
+        Query::Irradiance { normal } => {
+            // A Lambertian lobe of reflectance 1/(BRDF per unit ρ at cos = 1) has
+            // value max(0, n·ω): the cosine-weighted integral.
+            let lobe = Lobe::Lambert {
+                normal,
+                reflectance: Rgb::splat(1.0 / <W::S as Dim>::lambert(1.0)),
+            };
+            sample_at(world, x, &lobe, None, Rgb::ONE, settings, s, rays)
+        }
+    }
+}
+
+/// Mean and standard error of an estimate, per part and channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Estimate {
+    pub mean: Parts,
+    pub std_error: Parts,
+    pub samples: u64,
+    pub rays: u64,
+}
+
+/// Running sums for [`Estimate`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Accumulator {
+    sum: [Rgb; 3],
+    sum2: [Rgb; 3],
+    n: u64,
+    rays: u64,
+}
+
+impl Accumulator {
+    pub fn push(&mut self, p: &Parts) {
+        for (k, v) in p.as_array().into_iter().enumerate() {
+            self.sum[k] += v;
+            self.sum2[k] += v * v;
+        }
+        self.n += 1;
+    }
+
+    pub fn add_rays(&mut self, r: u64) {
+        self.rays += r;
+    }
+
+    pub fn estimate(&self) -> Estimate {
+        let n = self.n.max(1) as f64;
+        let mean = self.sum.map(|s| s / n);
+        let se: [Rgb; 3] = std::array::from_fn(|k| {
+            let var = (self.sum2[k] / n - mean[k] * mean[k]).max(Rgb::ZERO) * (n / (n - 1.0).max(1.0));
+            (var / n).powf(0.5)
+        });
+        let parts = |v: [Rgb; 3]| Parts {
+            direct: v[0],
+            single: v[1],
+            multiple: v[2],
+        };
+        Estimate {
+            mean: parts(mean),
+            std_error: parts(se),
+            samples: self.n,
+            rays: self.rays,
+        }
+    }
+}
+
+/// Estimate the query at `x` with `spp` samples; `item` selects the random streams
+/// (e.g. the pixel index), so equal (seed, item) give identical results.
+#[allow(clippy::too_many_arguments)] // the estimate's inputs are spelled out
+pub fn estimate<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    q: &Query<W::S>,
+    settings: &Settings,
+    spp: u32,
+    seed: u64,
+    item: u64,
+) -> Estimate {
+    let mut acc = Accumulator::default();
+    if !q.defined_at(world, x) {
+        return acc.estimate();
+    }
+    let mut rays = 0;
+    for k in 0..spp {
+        let mut s = Sampler::new2(seed, item, k as u64);
+        acc.push(&sample_query(world, x, q, settings, &mut s, &mut rays));
+    }
+    acc.add_rays(rays);
+    let mut e = acc.estimate();
+    e.samples = spp as u64;
+    e
+}
+
+/// Mean and standard error per channel of `n` samples of `f(sampler)`, each with
+/// its stream (seed, item, k).
+pub fn estimate_with(n: u64, seed: u64, item: u64, mut f: impl FnMut(&mut Sampler) -> Rgb) -> (Rgb, Rgb) {
+    let mut acc = Accumulator::default();
+    for k in 0..n {
+        acc.push(&Parts {
+            direct: f(&mut Sampler::new2(seed, item, k)),
+            ..Default::default()
+        });
+    }
+    let e = acc.estimate();
+    (e.mean.direct, e.std_error.direct)
+}
+
+/// Estimate the radiance L_i(x, ω) arriving at `x` from the unit direction `w`:
+/// (mean, standard error).
+pub fn estimate_radiance<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    w: VecOf<W>,
+    settings: &Settings,
+    spp: u32,
+    seed: u64,
+) -> (Rgb, Rgb) {
+    let mut rays = 0;
+    estimate_with(spp as u64, seed, 0, |s| {
+        radiance_path(world, x, w, None, None, settings, s, &mut rays).0
+    })
+}

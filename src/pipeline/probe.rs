@@ -1,0 +1,307 @@
+//! A cache point's incoming light field (theory.md §3), in any dimension: N
+//! stratified directions around a medium point x (a circle's arcs, a sphere's
+//! Fibonacci set, jittered per (seed, item)) with their neighbours, each ray's
+//! surface hit with the radiance leaving it towards x, and ray-marched medium samples
+//! with recursive estimates of L_s.
+//!
+//! Parameters ([`ProbeSettings`]): `rays` (N), `paths` (recursive paths per hit and
+//! per medium sample), `steps` (medium samples per ray over the march length),
+//! `transmittance_cutoff`, `far_factor`, `jitter`, `settings` (the path tracer's).
+//!
+//! The march: every ray is cast first; the march length is the farthest point any
+//! ray still has medium in front of it (its hit, or where it leaves the medium
+//! region), capped where the transmittance falls below `transmittance_cutoff` and at
+//! `far_factor` × the scene size, and the step is that length over `steps` (so a
+//! room is sampled at room scale, not at the scale of the fog's mean free path).
+//! Medium sample i of ray k sits at depth (i + ξ_k)·Δt with the ray's own jitter ξ_k,
+//! so the i-th samples of neighbouring rays form shells. (A single offset shared by
+//! all rays makes the shells exact but correlates the rays' errors: a measured 17%
+//! bias of the multiple-scattering value on occluder.json, gone with per-ray jitter.)
+//!
+//! Delta lights are kept apart for the direct part (theory.md §2). Escaped rays end
+//! at the cut length and carry what the world says leaves along them (the sky in
+//! 3D), scaled by T_true / exp(−σ_t(x)·length) so that the proxy's homogeneous
+//! transmittance gives the true value through a bounded medium.
+//!
+//! L_s is wanted towards a fixed direction ω_o or towards a point (the camera of a
+//! 3D render: [`Outgoing::TowardsPoint`]), in which case ω_o turns with x and the
+//! derivatives include that turning.
+
+use super::dim::Dim;
+use super::lobe::Lobe;
+use super::medium::Region;
+use super::path::{Settings, radiance_leaving, sample_at};
+use super::world::{DirectLight, Hit, World};
+use crate::core::color::Rgb;
+pub use crate::core::phase::Outgoing;
+use crate::core::rng::{Sampler, mix64};
+use crate::core::space::Space;
+use crate::progress::{Cancelled, Progress};
+use rayon::prelude::*;
+use serde::Serialize;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ProbeSettings {
+    /// Number of stratified directions N.
+    pub rays: usize,
+    /// Recursive paths per hit point and per medium sample.
+    pub paths: u32,
+    /// Medium samples per ray over the march length.
+    pub steps: usize,
+    /// Stop marching where the transmittance from x falls below this.
+    pub transmittance_cutoff: f64,
+    /// Escaped rays end at this multiple of the scene size.
+    pub far_factor: f64,
+    /// Jitter of the directions in their strata, in [0, 1].
+    pub jitter: f64,
+    pub settings: Settings,
+}
+
+impl ProbeSettings {
+    /// The defaults for dimension `S` ([`Dim::PROBE_RAYS`] directions).
+    pub fn default_for<S: Dim>() -> Self {
+        Self::with_rays(S::PROBE_RAYS)
+    }
+
+    /// The defaults with `rays` directions.
+    pub fn with_rays(rays: usize) -> Self {
+        ProbeSettings {
+            rays,
+            paths: 1,
+            steps: 24,
+            transmittance_cutoff: 1e-3,
+            far_factor: 4.0,
+            jitter: 1.0,
+            settings: Settings::default(),
+        }
+    }
+}
+
+/// Where a probe ray met a surface, and the radiance leaving it towards x.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SurfaceHit<S: Dim> {
+    pub point: S::Vec,
+    pub prim: u32,
+    /// Unit normal on the side facing x.
+    pub normal: S::Vec,
+    /// L_o(h → x): emission (active side) plus the reflected estimate.
+    pub radiance: Rgb,
+}
+
+/// One ray of the light field.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ProbeRay<S: Dim> {
+    pub dir: S::Vec,
+    /// Distance to the hit, or where the ray was cut (transmittance or far limit).
+    pub length: f64,
+    pub hit: Option<SurfaceHit<S>>,
+    /// Radiance carried by the end point of an escaped ray (see the module docs).
+    pub escaped: Rgb,
+    /// Medium samples: L_s(m, −dir) (σ_s included) at depth (i + offset)·step;
+    /// zero outside the medium region.
+    pub samples: Vec<Rgb>,
+    /// Jitter of this ray's medium samples, in [0, 1).
+    pub offset: f64,
+}
+
+impl<S: Dim> ProbeRay<S> {
+    /// End point, its distance from x and the radiance it carries.
+    pub fn end(&self, x: S::Vec) -> (S::Vec, f64, Rgb) {
+        match &self.hit {
+            Some(h) => (h.point, S::length(h.point - x), h.radiance),
+            None => (x + self.dir * self.length, self.length, self.escaped),
+        }
+    }
+}
+
+/// The light field at one point.
+#[derive(Clone, Debug, Serialize)]
+pub struct LightField<S: Dim> {
+    pub x: S::Vec,
+    /// Direction L_s is wanted towards (at x, when it turns towards `eye`).
+    pub omega_o: S::Vec,
+    /// The point ω_o turns towards as x moves (a camera), if any.
+    pub eye: Option<S::Vec>,
+    pub rays: Vec<ProbeRay<S>>,
+    /// Neighbouring directions (indices into `rays`), oriented.
+    pub simplices: Vec<S::Simplex<u32>>,
+    /// Spacing Δt of the ray-marched medium samples.
+    pub step: f64,
+    /// Delta lights seen from x, analytically.
+    pub direct_lights: Vec<DirectLight<S>>,
+    /// σ_s, σ_t at x (zero without a medium).
+    pub sigma_s: Rgb,
+    pub sigma_t: Rgb,
+    pub g: f64,
+    /// Ray-casting queries spent.
+    pub cost_rays: u64,
+    pub seconds: f64,
+}
+
+impl<S: Dim> LightField<S> {
+    /// Depth of medium sample i of `ray`.
+    pub fn sample_depth(&self, ray: &ProbeRay<S>, i: usize) -> f64 {
+        (i as f64 + ray.offset) * self.step
+    }
+
+    /// Where L_s leaves towards, for the derivative core.
+    pub fn outgoing(&self) -> Outgoing<S::Vec> {
+        self.eye
+            .map_or(Outgoing::Direction(self.omega_o), Outgoing::TowardsPoint)
+    }
+
+    /// The angle (solid angle) per ray, 2π/N (4π/N).
+    pub fn ray_measure(&self) -> f64 {
+        S::SPHERE_MEASURE / self.rays.len() as f64
+    }
+}
+
+/// Capture the light field at `x` for L_s towards `out` (a fixed direction, or a
+/// point such as a camera). Deterministic for (seed, item) whatever the thread count.
+#[allow(clippy::too_many_arguments)] // the capture's inputs are spelled out
+pub fn capture<W: World>(
+    world: &W,
+    x: <W::S as Space>::Vec,
+    out: Outgoing<<W::S as Space>::Vec>,
+    ps: &ProbeSettings,
+    seed: u64,
+    item: u64,
+    progress: &Progress,
+) -> Result<LightField<W::S>, Cancelled> {
+    let start = std::time::Instant::now();
+    let unit = |v: <W::S as Space>::Vec| {
+        let l = W::S::length(v);
+        if l > 0.0 { v / l } else { W::S::axis(0) }
+    };
+    let (omega_o, eye) = match out {
+        Outgoing::Direction(w) => (w, None),
+        Outgoing::TowardsPoint(e) => (unit(e - x), Some(e)),
+    };
+    let medium = world.medium();
+    let at_x = world.medium_at(x);
+    let sigma_t_x = at_x.map_or(Rgb::ZERO, |m| m.sigma_t);
+    let far = ps.far_factor * world.scale();
+    let limit = match medium.map_or(0.0, |m| m.sigma_t.min_element()) {
+        sig if sig > 0.0 => (-ps.transmittance_cutoff.ln() / sig).min(far),
+        _ => far,
+    };
+    let n = ps.rays.max(W::S::DIM + 1);
+    let dirs = W::S::directions(n, ps.jitter, mix64(seed ^ mix64(item.wrapping_add(0x9e37))));
+    let simplices = W::S::neighbours(&dirs);
+    // Pass 1: every ray's hit and how far it still has medium in front of it.
+    let hits: Vec<(Option<Hit>, f64)> = dirs
+        .par_iter()
+        .map(|&dir| {
+            let hit = world.closest_hit(x, dir, f64::INFINITY, None);
+            let end = hit.map_or(limit, |h| h.t.min(limit));
+            let medium_end = medium.map_or(0.0, |m| {
+                m.region.pieces(x, dir, end).into_iter().last().map_or(0.0, |(_, b)| b)
+            });
+            (hit, medium_end)
+        })
+        .collect();
+    let march_len = hits.iter().map(|h| h.1).fold(0.0, f64::max).min(limit);
+    let steps = ps.steps.max(1);
+    let step = if march_len > 0.0 { march_len } else { limit } / steps as f64;
+    let t_cut = step * steps as f64;
+    let paths = ps.paths.max(1);
+    type Traced<S> = Result<(ProbeRay<S>, u64), Cancelled>;
+    let rays: Vec<Traced<W::S>> = dirs
+        .par_iter()
+        .zip(&hits)
+        .enumerate()
+        .map(|(k, (&dir, &(hit, _)))| {
+            progress.check()?;
+            let mut s = Sampler::new2(seed, item, k as u64);
+            let offset = s.next_f64();
+            let mut rays = 1u64;
+            let hit_record = hit.map(|h| {
+                let (sp, radiance) = radiance_leaving(world, &h, dir, paths, &ps.settings, &mut s, &mut rays);
+                SurfaceHit {
+                    point: sp.point,
+                    prim: h.prim,
+                    normal: sp.normal,
+                    radiance,
+                }
+            });
+            let length = hit.map_or(t_cut, |h| h.t);
+            let escaped = match hit {
+                None => escaped_radiance(world, x, dir, length, sigma_t_x),
+                Some(_) => Rgb::ZERO,
+            };
+            let mut samples = Vec::new();
+            if let Some(m) = medium {
+                let lobe = Lobe::Phase {
+                    phase: m.phase,
+                    travel: dir,
+                };
+                let mut i = 0;
+                loop {
+                    let t = (i as f64 + offset) * step;
+                    if t >= length.min(t_cut) {
+                        break;
+                    }
+                    let p = x + dir * t;
+                    let mut sum = Rgb::ZERO;
+                    if m.contains(p) {
+                        for _ in 0..paths {
+                            sum += sample_at(world, p, &lobe, None, Rgb::ONE, &ps.settings, &mut s, &mut rays).total();
+                        }
+                        sum = sum * m.sigma_s / paths as f64;
+                    }
+                    samples.push(sum);
+                    i += 1;
+                }
+            }
+            let ray = ProbeRay {
+                dir,
+                length,
+                hit: hit_record,
+                escaped,
+                samples,
+                offset,
+            };
+            Ok((ray, rays))
+        })
+        .collect();
+    let mut out = Vec::with_capacity(n);
+    let mut cost = 0;
+    for r in rays {
+        let (ray, c) = r?;
+        out.push(ray);
+        cost += c;
+    }
+    let (direct_lights, c) = world.direct_lights(x);
+    Ok(LightField {
+        x,
+        omega_o,
+        eye,
+        rays: out,
+        simplices,
+        step,
+        direct_lights,
+        sigma_s: at_x.map_or(Rgb::ZERO, |m| m.sigma_s),
+        sigma_t: sigma_t_x,
+        g: at_x.map_or(0.0, |m| m.g()),
+        cost_rays: cost + c,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// What an escaped probe ray carries, corrected for the proxy's homogeneous
+/// transmittance model (zero where the correction is not representable).
+fn escaped_radiance<W: World>(
+    world: &W,
+    x: <W::S as Space>::Vec,
+    dir: <W::S as Space>::Vec,
+    length: f64,
+    sigma_t_x: Rgb,
+) -> Rgb {
+    let sky = world.escaped_probe(dir);
+    if sky == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let t_true = world.transmittance(x, dir, world.world_exit(x, dir));
+    let t_model = (-sigma_t_x * length).exp();
+    sky * Rgb::select(t_model.cmpgt(Rgb::splat(1e-200)), t_true / t_model, Rgb::ZERO)
+}

@@ -1,0 +1,187 @@
+//! Light field → occlusion-free proxy elements fixed in world space (theory.md §5),
+//! in any dimension.
+//!
+//! - Surface elements: each simplex of neighbouring directions (a pair of rays in
+//!   2D, a triangle of the sphere's triangulation in 3D) with its vertices moved to
+//!   the rays' end points (hits; escaped rays end at the cut length with the
+//!   radiance of [`ProbeRay::end`]). Where the vertices lie at very different
+//!   depths the element bridges an occluder's edge and the background: its form
+//!   factor (angle, solid angle) changes fast as x moves, which is how occlusion
+//!   changes enter the derivatives. Vertices are ordered so that it is positive
+//!   from x.
+//! - Medium elements: at each shell i, the simplex of the i-th samples of its rays,
+//!   with thickness Δt. Where some ray stopped before shell i (it hit an occluder),
+//!   the element bridges that ray's end point and the others' samples.
+//!
+//! A surface element carries the radiance of its vertex **farther from x**
+//! (Schwarzhaupt et al. 2012: what gets revealed or hidden as x moves);
+//! [`RadianceRule::Average`] is the alternative to measure against. Medium elements
+//! within a shell average their samples (the farther rule would shift every shell
+//! outwards by the rays' jitter: a measured 5% loss through the transmittance). A
+//! bridging medium element is anchored at its samples' centroid and carries their
+//! sum over the simplex's vertex count (the ray ends count as zero), so that every
+//! sample keeps the weight it has in the plain estimate. (Carrying the samples'
+//! mean instead overweights them: +17% of the multiple-scattering value on
+//! fog_box.json with 16 steps.)
+//! Transmittance and phase are evaluated towards the element's anchor.
+
+use super::dim::Dim;
+use super::probe::{LightField, ProbeRay};
+use crate::core::color::Rgb;
+use crate::core::space::Space;
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum RadianceRule {
+    /// The farther vertex's radiance (Schwarzhaupt et al. 2012).
+    #[default]
+    Farther,
+    /// The mean of the vertices' radiance.
+    Average,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ElementKind {
+    /// Contributes to single scattering (light from surfaces).
+    Surface,
+    /// Contributes to multiple scattering (light from the medium).
+    Medium,
+}
+
+/// A proxy element: the simplex `v` (oriented so that its form factor from x is
+/// positive), the anchor towards which transmittance and phase are evaluated, and
+/// the radiance it carries (for medium elements already multiplied by the shell
+/// thickness Δt).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Element<S: Dim> {
+    pub v: S::Simplex<S::Vec>,
+    pub anchor: S::Vec,
+    pub radiance: Rgb,
+    pub kind: ElementKind,
+    /// The vertices lie at clearly different depths (an occlusion boundary).
+    pub bridging: bool,
+    /// Angle (solid angle) of the element's directions, 2π/N (4π/2N) on average.
+    pub dir_measure: f64,
+}
+
+impl<S: Dim> crate::core::metric::Radiant for Element<S> {
+    fn radiance_mut(&mut self) -> &mut Rgb {
+        &mut self.radiance
+    }
+}
+
+impl<S: Dim> Element<S> {
+    /// Longest edge.
+    pub fn size(&self) -> f64 {
+        let v = self.v.as_ref();
+        let mut size = 0.0f64;
+        for i in 0..v.len() {
+            for j in i + 1..v.len() {
+                size = size.max(S::length(v[j] - v[i]));
+            }
+        }
+        size
+    }
+}
+
+/// Vertices whose depths differ by more than this fraction bridge a discontinuity.
+const BRIDGE_RATIO: f64 = 0.1;
+
+/// A vertex of an element: position, distance from x, radiance.
+type Vertex<S> = (<S as Space>::Vec, f64, Rgb);
+
+fn make<S: Dim>(
+    x: S::Vec,
+    v: S::Simplex<Vertex<S>>,
+    rule: RadianceRule,
+    kind: ElementKind,
+    bridging: bool,
+    dir_measure: f64,
+) -> Element<S> {
+    let v = v.as_ref();
+    let (anchor, radiance) = match rule {
+        RadianceRule::Farther => {
+            let far = (0..v.len())
+                .max_by(|&i, &j| v[i].1.total_cmp(&v[j].1))
+                .expect("a simplex has vertices");
+            (v[far].0, v[far].2)
+        }
+        RadianceRule::Average => centroid::<S>(v.iter().map(|p| (p.0, p.2))),
+    };
+    Element {
+        v: S::orient(x, S::simplex(|k| v[k].0)),
+        anchor,
+        radiance,
+        kind,
+        bridging,
+        dir_measure,
+    }
+}
+
+/// Mean position and mean radiance of vertices.
+fn centroid<S: Dim>(v: impl Iterator<Item = (S::Vec, Rgb)>) -> (S::Vec, Rgb) {
+    let (mut c, mut l, mut n) = (S::zero(), Rgb::ZERO, 0.0);
+    for (p, r) in v {
+        c += p;
+        l += r;
+        n += 1.0;
+    }
+    (c / n, l / n)
+}
+
+/// Build the proxy of a light field.
+pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> {
+    let x = lf.x;
+    let ends: Vec<Vertex<S>> = lf.rays.iter().map(|r| r.end(x)).collect();
+    let mut out = Vec::with_capacity(lf.simplices.len() * 2);
+    let measure = |t: &S::Simplex<u32>| S::direction_measure(S::simplex(|k| lf.rays[t.as_ref()[k] as usize].dir));
+    for t in &lf.simplices {
+        let v: S::Simplex<Vertex<S>> = S::simplex(|k| ends[t.as_ref()[k] as usize]);
+        let (dmin, dmax) = v
+            .as_ref()
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), e| (lo.min(e.1), hi.max(e.1)));
+        let bridging = dmax - dmin > BRIDGE_RATIO * dmin;
+        out.push(make(x, v, rule, ElementKind::Surface, bridging, measure(t)));
+    }
+    let shells = lf.rays.iter().map(|r| r.samples.len()).max().unwrap_or(0);
+    for t in &lf.simplices {
+        let ray = |k: usize| -> &ProbeRay<S> { &lf.rays[t.as_ref()[k] as usize] };
+        let omega = measure(t);
+        for i in 0..shells {
+            let present: S::Simplex<bool> = S::simplex(|k| i < ray(k).samples.len());
+            if !present.as_ref().iter().any(|&p| p) {
+                continue;
+            }
+            let v: S::Simplex<Vertex<S>> = S::simplex(|k| {
+                let r = ray(k);
+                if present.as_ref()[k] {
+                    let d = lf.sample_depth(r, i);
+                    (x + r.dir * d, d, r.samples[i] * lf.step)
+                } else {
+                    let e = ends[t.as_ref()[k] as usize];
+                    (e.0, e.1, Rgb::ZERO)
+                }
+            });
+            if v.as_ref().iter().all(|e| e.2 == Rgb::ZERO) {
+                continue; // outside the medium region: nothing to carry
+            }
+            let bridging = !present.as_ref().iter().all(|&p| p);
+            let mut e = make(x, v, RadianceRule::Average, ElementKind::Medium, bridging, omega);
+            if bridging {
+                // See the module docs: the samples' sum over the vertex count.
+                let (mut c, mut l, mut m) = (S::zero(), Rgb::ZERO, 0.0);
+                for (p, _) in v.as_ref().iter().zip(present.as_ref()).filter(|(_, p)| **p) {
+                    c += p.0;
+                    l += p.2;
+                    m += 1.0;
+                }
+                (e.anchor, e.radiance) = (c / m, l / S::DIM as f64);
+            }
+            out.push(e);
+        }
+    }
+    out
+}

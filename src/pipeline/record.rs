@@ -1,0 +1,180 @@
+//! One radiance-cache record, in any dimension (theory.md §3–7): the light field at
+//! a query point → its proxy → the method's derivatives → the value, gradient and
+//! Hessian a record stores, and the Hessian its metric uses. Methods:
+//! - `ours`: occlusion-aware gradient and Hessian ([`aware`]); the metric's Hessian
+//!   is taken with a radiance floor (Schwarzhaupt et al. 2012, for black
+//!   occluders), extent = the seed's Hessian ellipse (ellipsoid);
+//! - `jarosz08`: occlusion-unaware gradient ([`unaware`]), extent = the gradient
+//!   circle (ball).
+//!
+//! Both store the light field's plain Monte Carlo estimate as the value (unbiased),
+//! so at equal record positions they differ only in derivatives and extents. (The
+//! proxy's own value is 4–8% low where emitters' outlines cross its elements: the
+//! farther-vertex rule darkens them.)
+
+use super::derivatives::{AwareSettings, PartDerivs, aware, plain_estimate, unaware};
+use super::dim::Dim;
+use super::probe::{Outgoing, ProbeSettings, capture};
+use super::proxy::build;
+use super::world::World;
+use crate::core::metric::{CacheMethod, MetricParams, with_radiance_floor};
+use crate::core::rng::mix64;
+use crate::core::space::Space;
+use crate::progress::{Cancelled, Progress};
+use serde::Serialize;
+use std::time::Instant;
+
+/// How a cache is built.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CacheSettings {
+    pub method: CacheMethod,
+    /// Error threshold ε (theory.md §6: a length^{d−1}·… for ours, dimensionless for
+    /// jarosz08; compare methods at equal record count).
+    pub eps: f64,
+    pub probe: ProbeSettings,
+    pub aware: AwareSettings,
+    /// Separate caches for single and multiple scattering.
+    pub per_part: bool,
+    /// Second-order interpolation (ours only; the baseline has no Hessian).
+    pub second_order: bool,
+    /// Fraction of the mean element radiance added to every element before the
+    /// metric's Hessian.
+    pub hessian_floor: f64,
+    /// Seed of the records' light fields.
+    pub seed: u64,
+}
+
+impl CacheSettings {
+    /// Defaults for dimension `S` ([`ProbeSettings::default_for`]).
+    pub fn new<S: Dim>(method: CacheMethod, eps: f64) -> Self {
+        CacheSettings {
+            method,
+            eps,
+            probe: ProbeSettings::default_for::<S>(),
+            aware: AwareSettings::default(),
+            per_part: false,
+            second_order: false,
+            hessian_floor: 0.01,
+            seed: 1,
+        }
+    }
+
+    pub fn metric(&self, scene_scale: f64) -> MetricParams {
+        MetricParams::scene_relative(scene_scale, self.eps)
+    }
+}
+
+/// The cached quantities a record can feed: single + multiple scattering, or one
+/// of them (per-part caches).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cached {
+    Scattered,
+    Single,
+    Multiple,
+}
+
+/// What one light field gives a record, kept to re-derive extents for another ε.
+#[derive(Clone, Debug)]
+pub struct RecordData<S: Dim> {
+    /// Value (the plain estimate) and derivatives, per part.
+    pub parts: PartDerivs<S>,
+    /// Luminance Hessians the metric uses (with the radiance floor; zero for
+    /// jarosz08), per [`Cached`] quantity.
+    pub metric_hessians: [S::Mat; 3],
+    pub rays: u64,
+    /// Wall time of the capture and derivatives.
+    pub seconds: f64,
+}
+
+impl<S: Dim> RecordData<S> {
+    /// The value and derivatives of a cached quantity.
+    pub fn payload(&self, q: Cached) -> crate::core::taylor_rgb::TaylorRgb<S> {
+        match q {
+            Cached::Scattered => self.parts.single + self.parts.multiple,
+            Cached::Single => self.parts.single,
+            Cached::Multiple => self.parts.multiple,
+        }
+    }
+
+    pub fn metric_hessian(&self, q: Cached) -> S::Mat {
+        self.metric_hessians[q as usize]
+    }
+}
+
+/// The light field at query point `x` (stream `id`) and what the method derives.
+pub fn compute_record<W: World>(
+    world: &W,
+    x: <W::S as Space>::Vec,
+    out: Outgoing<<W::S as Space>::Vec>,
+    cs: &CacheSettings,
+    id: u64,
+    progress: &Progress,
+) -> Result<RecordData<W::S>, Cancelled> {
+    let start = Instant::now();
+    let lf = capture(world, x, out, &cs.probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;
+    let zero = <W::S as Space>::zero_mat();
+    let (mut parts, metric_hessians) = match cs.method {
+        CacheMethod::Ours => {
+            let elements = build(&lf, cs.aware.rule);
+            let floored = aware(&lf, &with_radiance_floor(&elements, cs.hessian_floor), &cs.aware);
+            let lum = |t: crate::core::taylor_rgb::TaylorRgb<W::S>| t.luminance().hess;
+            let hessians = [
+                lum(floored.single + floored.multiple),
+                lum(floored.single),
+                lum(floored.multiple),
+            ];
+            (aware(&lf, &elements, &cs.aware), hessians)
+        }
+        CacheMethod::Jarosz08 => (unaware(&lf), [zero; 3]),
+    };
+    let plain = plain_estimate(&lf);
+    for (part, value) in [&mut parts.direct, &mut parts.single, &mut parts.multiple]
+        .into_iter()
+        .zip(plain.as_array())
+    {
+        for (c, ch) in part.channels.iter_mut().enumerate() {
+            ch.value = value[c];
+        }
+    }
+    Ok(RecordData {
+        parts,
+        metric_hessians,
+        rays: lf.cost_rays,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// One record, for figures and JSON (a simplex holds one value per axis).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RecordInfo<S: Dim> {
+    pub position: S::Vec,
+    /// Unit axes of the extent and their radii.
+    pub axes: S::Simplex<S::Vec>,
+    pub radii: S::Simplex<f64>,
+    pub luminance: f64,
+    pub rays: u64,
+}
+
+impl<S: Dim> RecordInfo<S> {
+    pub fn of(r: &crate::core::cache::Record<S, crate::core::taylor_rgb::TaylorRgb<S>>) -> Self {
+        RecordInfo {
+            position: r.position,
+            axes: S::simplex(|j| S::col(r.extent.axes, j)),
+            radii: S::simplex(|j| r.extent.radii[j]),
+            luminance: crate::core::color::luminance(r.value.value()),
+            rays: r.cost_rays,
+        }
+    }
+}
+
+/// A record at x may be used at y: it sees y (a record never extrapolates across a
+/// surface, where radiance jumps).
+pub fn sees<W: World>(world: &W, x: <W::S as Space>::Vec, y: <W::S as Space>::Vec, rays: &mut u64) -> bool {
+    let d = y - x;
+    let len = W::S::length(d);
+    if len == 0.0 {
+        return true;
+    }
+    *rays += 1;
+    !world.occluded(x, d / len, len, None)
+}
