@@ -433,7 +433,7 @@ fn params_follow_the_app_resolution_unless_set() {
     assert_eq!((fp2.width, fp2.height), (40, 1));
     let rp = p.reference_params(&fp);
     assert_eq!((rp.spp, rp.seed), (256, 7 ^ 0x5EED));
-    let cs = p.cache_settings(CacheMethod::Jarosz08, 7);
+    let cs = p.cache_settings(CacheMethod::Jarosz08, &fp);
     assert_eq!((cs.probe.rays, cs.probe.steps, cs.seed), (512, 16, 7));
     assert_eq!(
         compare_command(Some("a b.json"), &fp, &p, "out/compare"),

@@ -18,7 +18,7 @@ fn params(scene: &Scene, w: usize, h: usize) -> FieldParams {
 }
 
 fn settings(method: CacheMethod, seed: u64) -> CacheSettings {
-    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, 0.05);
+    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, 0.05, Default::default());
     cs.probe.rays = 512;
     cs.probe.steps = 8;
     cs.seed = seed;

@@ -11,7 +11,7 @@ use volcache::volume::cached::{
     CacheSettings, CachedRenderParams, RecordMemo, default_eps, march_reference, place, reconstruct, render_cached,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
-use volcache::volume::render::render;
+use volcache::volume::render::{RenderParams, render};
 use volcache::volume::scene::Scene;
 
 fn load(name: &str) -> Scene {
@@ -32,7 +32,11 @@ fn params(scene: &Scene, w: usize, h: usize, spp: u32, k: f64) -> CachedRenderPa
 }
 
 fn settings(method: CacheMethod, scene: &Scene, rays: usize, steps: usize, seed: u64) -> CacheSettings {
-    let mut cs = CacheSettings::new::<volcache::core::space::D3>(method, default_eps(method, scene));
+    let mut cs = CacheSettings::new::<volcache::core::space::D3>(
+        method,
+        default_eps(method, scene),
+        RenderParams::from_scene(scene).settings,
+    );
     cs.probe.rays = rays;
     cs.probe.steps = steps;
     cs.seed = seed;

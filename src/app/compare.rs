@@ -59,11 +59,11 @@ impl CompareParams {
 
     /// The cache settings of `method` (as `volcache caches`' defaults with these
     /// rays, steps and seed).
-    pub fn cache_settings(&self, method: CacheMethod, seed: u64) -> CacheSettings {
-        let mut cs = CacheSettings::new::<crate::core::space::D2>(method, 0.05);
+    pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
+        let mut cs = CacheSettings::new::<crate::core::space::D2>(method, 0.05, fp.settings);
         cs.probe.rays = self.rays.max(3);
         cs.probe.steps = self.steps.max(1);
-        cs.seed = seed;
+        cs.seed = fp.seed;
         cs
     }
 
@@ -165,7 +165,7 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
             r.send(Arc::new(res.clone()));
             let target = params.caches.max(1);
             for method in METHODS {
-                let cs = params.cache_settings(method, fp.seed);
+                let cs = params.cache_settings(method, &fp);
                 let name = method_label(method);
                 r.stage(format!("compare: {name}, searching ε for {target} records"));
                 let mut memo = RecordMemo::new();

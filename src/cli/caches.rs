@@ -105,8 +105,8 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
     fp
 }
 
-pub fn cache_settings(method: CacheMethod, a: &CacheArgs) -> CacheSettings {
-    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, a.eps.unwrap_or(0.05));
+pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
+    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, a.eps.unwrap_or(0.05), fp.settings);
     cs.probe.rays = a.rays.max(3);
     cs.probe.steps = a.steps.max(1);
     cs.per_part = a.per_part;
@@ -149,7 +149,7 @@ pub fn run_method(
             } else {
                 CacheMethod::Jarosz08
             };
-            let cs = cache_settings(m, a);
+            let cs = cache_settings(m, a, fp);
             let mut memo = RecordMemo::new();
             let eps = match a.caches {
                 Some(k) => {

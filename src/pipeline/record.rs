@@ -14,6 +14,7 @@
 
 use super::derivatives::{AwareSettings, PartDerivs, aware, plain_estimate, unaware};
 use super::dim::Dim;
+use super::path::Settings;
 use super::probe::{Outgoing, ProbeSettings, capture};
 use super::proxy::build;
 use super::world::World;
@@ -45,12 +46,17 @@ pub struct CacheSettings {
 }
 
 impl CacheSettings {
-    /// Defaults for dimension `S` ([`ProbeSettings::default_for`]).
-    pub fn new<S: Dim>(method: CacheMethod, eps: f64) -> Self {
+    /// Defaults for dimension `S` ([`ProbeSettings::default_for`]); the records'
+    /// recursive paths use `paths`, the settings of the image they serve (so that a
+    /// cached image and its path-traced reference trace as deep).
+    pub fn new<S: Dim>(method: CacheMethod, eps: f64, paths: Settings) -> Self {
         CacheSettings {
             method,
             eps,
-            probe: ProbeSettings::default_for::<S>(),
+            probe: ProbeSettings {
+                settings: paths,
+                ..ProbeSettings::default_for::<S>()
+            },
             aware: AwareSettings::default(),
             per_part: false,
             second_order: false,
