@@ -27,6 +27,47 @@ impl SceneError {
     }
 }
 
+/// The text of a scene file (an error names the file).
+pub fn read(path: &std::path::Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+        file: path.display().to_string(),
+        message: e.to_string(),
+    })
+}
+
+/// Parse scene JSON (unknown fields rejected by the description's serde attributes)
+/// and validate it with `validate`; errors name `file` and the JSON path.
+pub fn parse<T: serde::de::DeserializeOwned>(
+    text: &str,
+    file: &str,
+    validate: impl FnOnce(&T) -> Vec<Problem>,
+) -> Result<T, SceneError> {
+    let de = &mut serde_json::Deserializer::from_str(text);
+    let desc: T = serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let problems = vec![Problem {
+            path: if path == "." { "(document)".into() } else { path },
+            message: e.inner().to_string(),
+        }];
+        SceneError::Invalid {
+            file: file.to_string(),
+            problems,
+        }
+    })?;
+    validated(desc, file, validate)
+}
+
+/// `desc` if `validate` finds no problem, else an error naming `file`.
+pub fn validated<T>(desc: T, file: &str, validate: impl FnOnce(&T) -> Vec<Problem>) -> Result<T, SceneError> {
+    match validate(&desc) {
+        problems if problems.is_empty() => Ok(desc),
+        problems => Err(SceneError::Invalid {
+            file: file.to_string(),
+            problems,
+        }),
+    }
+}
+
 /// One problem with a scene: the JSON path of the field and what is wrong.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Problem {

@@ -14,6 +14,7 @@ use crate::core::color::Rgb;
 use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
 use crate::core::space::D2;
+use crate::pipeline::delta::{gather, point_lights};
 use crate::pipeline::world::{DirectLight, World};
 use glam::DVec2;
 
@@ -23,26 +24,7 @@ pub type Lobe = crate::pipeline::lobe::Lobe<D2>;
 /// Light from point and collimated lights arriving at `p` and weighted by `lobe`
 /// (∫ value(ω) L_i,delta(ω) dω). `skip` is the segment `p` lies on, if any.
 pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-    let mut sum = Rgb::ZERO;
-    // Keeps 1/r finite for points on top of a light (users probe there).
-    let r_min = 1e-9 * scene.scale();
-    for l in &scene.point_lights {
-        let d = l.position - p;
-        let r = d.length();
-        if r == 0.0 {
-            continue;
-        }
-        let w = d / r;
-        let (value, _) = lobe.eval(w);
-        if value == Rgb::ZERO {
-            continue;
-        }
-        *rays += 1;
-        if scene.occluded(p, w, r, skip) {
-            continue;
-        }
-        sum += value * l.intensity * scene.transmittance(p, w, r) / r.max(r_min);
-    }
+    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays);
     for l in &scene.collimated_lights {
         let w = -l.direction;
         let (value, _) = lobe.eval(w);
@@ -139,23 +121,8 @@ pub fn emitter_nee(
 
 /// The delta lights visible from `x` (theory.md §2), and the shadow rays this cost.
 pub fn gather_direct(scene: &Scene, x: DVec2) -> (Vec<DirectLight<D2>>, u64) {
-    let mut out = Vec::new();
-    let mut rays = 0;
-    for l in &scene.point_lights {
-        let d = l.position - x;
-        let r = d.length();
-        if r == 0.0 {
-            continue;
-        }
-        rays += 1;
-        if !scene.occluded(x, d / r, r, None) {
-            out.push(DirectLight::Point {
-                position: l.position,
-                intensity: l.intensity,
-                transmittance: scene.transmittance(x, d / r, r),
-            });
-        }
-    }
+    let (mut out, mut rays) = (Vec::new(), 0);
+    gather(scene, &scene.point_lights, x, &mut out, &mut rays);
     for l in &scene.collimated_lights {
         let w = -l.direction;
         let Some((t, _)) = intersect_segment(x, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY) else {

@@ -8,12 +8,13 @@ use super::geometry::{Segment, SegmentSet};
 use super::lights::{self, Lobe};
 use super::medium::{Medium, Region};
 use super::scene_desc::{LightDesc, RegionDesc, SceneDesc};
-use super::validate::{Problem, validate};
+use super::validate::validate;
 use crate::core::color::Rgb;
 use crate::core::rng::Sampler;
 use crate::core::space::D2;
 use crate::pipeline::emitters::Emitters;
 use crate::pipeline::world::{DirectLight, Hit, SurfacePoint, World};
+use crate::scene_check;
 use glam::DVec2;
 use std::path::Path;
 
@@ -23,12 +24,8 @@ pub const DEFAULT_SCENE_JSON: &str = include_str!("../../flatland_scenes/occlude
 
 pub use crate::scene_check::SceneError;
 
-#[derive(Clone, Debug, PartialEq)]
-pub struct PointLight {
-    pub position: DVec2,
-    /// W rad⁻¹.
-    pub intensity: Rgb,
-}
+/// A point light; intensity in W rad⁻¹.
+pub type PointLight = crate::pipeline::delta::PointLight<D2>;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct CollimatedLight {
@@ -61,12 +58,7 @@ pub struct Scene {
 impl Scene {
     /// Read, parse and validate a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
-            file: file.clone(),
-            message: e.to_string(),
-        })?;
-        Self::from_json(&text, &file)
+        Self::from_json(&scene_check::read(path)?, &path.display().to_string())
     }
 
     /// The embedded default scene.
@@ -77,31 +69,12 @@ impl Scene {
 
     /// Parse and validate scene JSON; `file` names the source in errors.
     pub fn from_json(text: &str, file: &str) -> Result<Scene, SceneError> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let path = if path == "." { "(document)".to_string() } else { path };
-            SceneError::Invalid {
-                file: file.to_string(),
-                problems: vec![Problem {
-                    path,
-                    message: e.inner().to_string(),
-                }],
-            }
-        })?;
-        Self::from_desc(desc, file)
+        Ok(Self::build(scene_check::parse(text, file, validate)?, file))
     }
 
     /// Validate a description and build the scene.
     pub fn from_desc(desc: SceneDesc, file: &str) -> Result<Scene, SceneError> {
-        let problems = validate(&desc);
-        if !problems.is_empty() {
-            return Err(SceneError::Invalid {
-                file: file.to_string(),
-                problems,
-            });
-        }
-        Ok(Self::build(desc, file))
+        Ok(Self::build(scene_check::validated(desc, file, validate)?, file))
     }
 
     fn build(desc: SceneDesc, file: &str) -> Scene {
@@ -174,10 +147,6 @@ impl Scene {
             t_min: 1e-10 * scale.max(1e-300),
         }
     }
-
-    /// Radius of the world disc (around the domain centre) where unbounded media
-    /// end, in scene sizes.
-    pub const WORLD_RADIUS: f64 = 1e3;
 }
 
 impl World for Scene {
@@ -198,13 +167,8 @@ impl World for Scene {
         self.geometry.occluded(o, d, self.t_min, t_max * (1.0 - 1e-10), skip)
     }
 
-    fn world_exit(&self, p: DVec2, d: DVec2) -> f64 {
-        let c = 0.5 * (self.domain_min + self.domain_max);
-        let r = Self::WORLD_RADIUS * self.scale();
-        let o = p - c;
-        let b = o.dot(d);
-        let disc = b * b - (o.length_squared() - r * r);
-        if disc <= 0.0 { 0.0 } else { (-b + disc.sqrt()).max(0.0) }
+    fn centre(&self) -> DVec2 {
+        0.5 * (self.domain_min + self.domain_max)
     }
 
     fn medium(&self) -> Option<&Medium> {

@@ -188,14 +188,19 @@ impl<S: Dim> Bvh<S> {
             return;
         }
         let inv_d = S::recip(d);
-        // Depth is logarithmic for sane inputs; the stack spills to the heap otherwise.
-        let mut stack: SmallVec<[u32; 64]> = SmallVec::new();
-        stack.push(0);
-        while let Some(idx) = stack.pop() {
-            let n = &self.nodes[idx as usize];
-            if n.bounds.hit(o, inv_d, *t_far).is_none() {
+        let Some(t_root) = self.nodes[0].bounds.hit(o, inv_d, *t_far) else {
+            return;
+        };
+        // Nodes to visit with the distance at which the ray enters them (tested when
+        // pushed; skipped if a hit found since is nearer). Depth is logarithmic for
+        // sane inputs; the stack spills to the heap otherwise.
+        let mut stack: SmallVec<[(u32, f64); 64]> = SmallVec::new();
+        stack.push((0, t_root));
+        while let Some((idx, t_enter)) = stack.pop() {
+            if t_enter > *t_far * (1.0 + 1e-12) {
                 continue;
             }
+            let n = &self.nodes[idx as usize];
             if n.count > 0 {
                 let s = n.start_or_right as usize;
                 for &i in &self.order[s..s + n.count as usize] {
@@ -210,12 +215,16 @@ impl<S: Dim> Bvh<S> {
                 // Push the farther child first so that the nearer one is visited first.
                 match (tl, tr) {
                     (Some(a), Some(b)) => {
-                        let (near, far) = if a <= b { (left, right) } else { (right, left) };
+                        let (near, far) = if a <= b {
+                            ((left, a), (right, b))
+                        } else {
+                            ((right, b), (left, a))
+                        };
                         stack.push(far);
                         stack.push(near);
                     }
-                    (Some(_), None) => stack.push(left),
-                    (None, Some(_)) => stack.push(right),
+                    (Some(a), None) => stack.push((left, a)),
+                    (None, Some(b)) => stack.push((right, b)),
                     (None, None) => {}
                 }
             }

@@ -80,6 +80,45 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     fn form_factor(v: Self::Simplex<Self::Vec>, x: Self::Vec) -> Taylor2<Self>;
 }
 
+/// The componentwise operations of [`Dim`] for a glam vector type (the same names in
+/// 2D and 3D).
+macro_rules! box_ops {
+    ($v:ty) => {
+        #[inline]
+        fn min(a: $v, b: $v) -> $v {
+            a.min(b)
+        }
+        #[inline]
+        fn max(a: $v, b: $v) -> $v {
+            a.max(b)
+        }
+        #[inline]
+        fn mul(a: $v, b: $v) -> $v {
+            a * b
+        }
+        #[inline]
+        fn recip(a: $v) -> $v {
+            a.recip()
+        }
+        #[inline]
+        fn splat(v: f64) -> $v {
+            <$v>::splat(v)
+        }
+        #[inline]
+        fn min_element(a: $v) -> f64 {
+            a.min_element()
+        }
+        #[inline]
+        fn max_element(a: $v) -> f64 {
+            a.max_element()
+        }
+        #[inline]
+        fn any_nan(a: $v) -> bool {
+            a.is_nan_mask().any()
+        }
+    };
+}
+
 impl Dim for D2 {
     const PROBE_RAYS: usize = 1024;
     type Phase = Hg2;
@@ -116,38 +155,7 @@ impl Dim for D2 {
     fn sample_uniform(s: &mut Sampler) -> DVec2 {
         DVec2::from_angle(TAU * s.next_f64())
     }
-    #[inline]
-    fn min(a: DVec2, b: DVec2) -> DVec2 {
-        a.min(b)
-    }
-    #[inline]
-    fn max(a: DVec2, b: DVec2) -> DVec2 {
-        a.max(b)
-    }
-    #[inline]
-    fn mul(a: DVec2, b: DVec2) -> DVec2 {
-        a * b
-    }
-    #[inline]
-    fn recip(a: DVec2) -> DVec2 {
-        a.recip()
-    }
-    #[inline]
-    fn splat(v: f64) -> DVec2 {
-        DVec2::splat(v)
-    }
-    #[inline]
-    fn min_element(a: DVec2) -> f64 {
-        a.min_element()
-    }
-    #[inline]
-    fn max_element(a: DVec2) -> f64 {
-        a.max_element()
-    }
-    #[inline]
-    fn any_nan(a: DVec2) -> bool {
-        a.is_nan_mask().any()
-    }
+    box_ops!(DVec2);
     fn half_boundary(e: DVec2) -> f64 {
         e.x + e.y
     }
@@ -213,38 +221,7 @@ impl Dim for D3 {
         let r = (1.0 - z * z).max(0.0).sqrt();
         DVec3::new(r * (TAU * u2).cos(), r * (TAU * u2).sin(), z)
     }
-    #[inline]
-    fn min(a: DVec3, b: DVec3) -> DVec3 {
-        a.min(b)
-    }
-    #[inline]
-    fn max(a: DVec3, b: DVec3) -> DVec3 {
-        a.max(b)
-    }
-    #[inline]
-    fn mul(a: DVec3, b: DVec3) -> DVec3 {
-        a * b
-    }
-    #[inline]
-    fn recip(a: DVec3) -> DVec3 {
-        a.recip()
-    }
-    #[inline]
-    fn splat(v: f64) -> DVec3 {
-        DVec3::splat(v)
-    }
-    #[inline]
-    fn min_element(a: DVec3) -> f64 {
-        a.min_element()
-    }
-    #[inline]
-    fn max_element(a: DVec3) -> f64 {
-        a.max_element()
-    }
-    #[inline]
-    fn any_nan(a: DVec3) -> bool {
-        a.is_nan_mask().any()
-    }
+    box_ops!(DVec3);
     fn half_boundary(e: DVec3) -> f64 {
         e.x * e.y + e.y * e.z + e.z * e.x
     }

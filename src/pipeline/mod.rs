@@ -8,6 +8,7 @@
 //! files, cameras or images.
 
 pub mod bvh;
+pub mod delta;
 pub mod derivatives;
 pub mod dim;
 pub mod directions;

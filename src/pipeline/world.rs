@@ -58,6 +58,9 @@ pub enum DirectLight<S: Dim> {
     },
 }
 
+/// Radius of the sphere (circle) where unbounded media end, in scene sizes.
+pub const WORLD_RADIUS: f64 = 1e3;
+
 /// The scene as the method sees it.
 pub trait World: Sync {
     type S: Dim;
@@ -69,8 +72,18 @@ pub trait World: Sync {
     fn closest_hit(&self, o: VecOf<Self>, d: VecOf<Self>, t_max: f64, skip: Option<u32>) -> Option<Hit>;
     /// Is o + t·d blocked for some t < t_max (other than by `skip`)?
     fn occluded(&self, o: VecOf<Self>, d: VecOf<Self>, t_max: f64, skip: Option<u32>) -> bool;
-    /// Distance along p + t·d to the sphere where unbounded media end.
-    fn world_exit(&self, p: VecOf<Self>, d: VecOf<Self>) -> f64;
+    /// The centre of the scene's bounds.
+    fn centre(&self) -> VecOf<Self>;
+    /// Distance along p + t·d to the sphere of [`WORLD_RADIUS`] scene sizes around
+    /// the centre, where unbounded media end (0 outside it): paths leaving it escape,
+    /// so a thin non-absorbing fog cannot keep a path scattering far away forever.
+    fn world_exit(&self, p: VecOf<Self>, d: VecOf<Self>) -> f64 {
+        let r = WORLD_RADIUS * self.scale();
+        let o = p - self.centre();
+        let b = <Self::S as crate::core::space::Space>::dot(o, d);
+        let disc = b * b - (<Self::S as crate::core::space::Space>::length_squared(o) - r * r);
+        if disc <= 0.0 { 0.0 } else { (-b + disc.sqrt()).max(0.0) }
+    }
     fn medium(&self) -> Option<&Medium<Self::S, Self::Region>>;
     /// The medium at `p`, if any.
     fn medium_at(&self, p: VecOf<Self>) -> Option<&Medium<Self::S, Self::Region>> {

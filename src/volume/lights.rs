@@ -15,6 +15,7 @@ use crate::core::color::Rgb;
 use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
 use crate::core::space::D3;
+use crate::pipeline::delta::{gather, point_lights};
 use crate::pipeline::dim::Dim;
 use crate::pipeline::world::{DirectLight, World};
 use glam::DVec3;
@@ -36,24 +37,7 @@ fn transmittance_to_infinity(scene: &Scene, p: DVec3, w: DVec3) -> Rgb {
 /// Light from delta lights (point lights, suns without a cone) at `p`, weighted by
 /// `lobe`. `skip` is the triangle `p` lies on, if any.
 pub fn delta_lights(scene: &Scene, p: DVec3, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-    let mut sum = Rgb::ZERO;
-    for l in &scene.point_lights {
-        let d = l.position - p;
-        let r2 = d.length_squared();
-        if r2 == 0.0 {
-            continue;
-        }
-        let r = r2.sqrt();
-        let w = d / r;
-        let (value, _) = lobe.eval(w);
-        if value == Rgb::ZERO {
-            continue;
-        }
-        *rays += 1;
-        if !scene.occluded(p, w, r, skip) {
-            sum += value * l.intensity * scene.transmittance(p, w, r) / r2;
-        }
-    }
+    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays);
     for sun in scene.suns.iter().filter(|s| s.is_delta()) {
         let w = sun.to_sun;
         let (value, _) = lobe.eval(w);
@@ -218,23 +202,8 @@ pub fn direct_part(scene: &Scene, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: 
 /// The delta lights visible from `x` (suns with a cone taken at its centre), and the
 /// shadow rays this cost.
 pub fn gather_direct(scene: &Scene, x: DVec3) -> (Vec<DirectLight<D3>>, u64) {
-    let mut out = Vec::new();
-    let mut rays = 0;
-    for l in &scene.point_lights {
-        let d = l.position - x;
-        let r = d.length();
-        if r == 0.0 {
-            continue;
-        }
-        rays += 1;
-        if !scene.occluded(x, d / r, r, None) {
-            out.push(DirectLight::Point {
-                position: l.position,
-                intensity: l.intensity,
-                transmittance: scene.transmittance(x, d / r, r),
-            });
-        }
-    }
+    let (mut out, mut rays) = (Vec::new(), 0);
+    gather(scene, &scene.point_lights, x, &mut out, &mut rays);
     for sun in &scene.suns {
         let w = sun.to_sun;
         rays += 1;

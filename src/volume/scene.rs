@@ -16,6 +16,7 @@ use crate::core::space::D3;
 use crate::pipeline::bvh::{Aabb, Geometry};
 use crate::pipeline::emitters::Emitters;
 use crate::pipeline::world::{DirectLight, SurfacePoint, World};
+use crate::scene_check;
 pub use crate::scene_check::SceneError;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -30,12 +31,8 @@ pub struct Surface {
     pub two_sided: bool,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointLight {
-    pub position: DVec3,
-    /// W sr⁻¹.
-    pub intensity: Rgb,
-}
+/// A point light; intensity in W sr⁻¹.
+pub type PointLight = crate::pipeline::delta::PointLight<D3>;
 
 /// A distant light: a delta direction when `cos_max == 1`, else a uniform cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,44 +78,21 @@ pub struct Scene {
     pub scale: f64,
 }
 
-/// Radius of the world sphere (around the scene's centre) where unbounded media
-/// end, in scene sizes (as `flatland::Scene::WORLD_RADIUS`).
-pub const WORLD_RADIUS: f64 = 1e3;
-
 impl Scene {
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
-            file: file.clone(),
-            message: e.to_string(),
-        })?;
-        Self::from_json(&text, &file, path.parent().unwrap_or(Path::new(".")))
+        let base = path.parent().unwrap_or(Path::new("."));
+        Self::from_json(&scene_check::read(path)?, &path.display().to_string(), base)
     }
 
     /// Parse, validate and build; `file` names the source in errors, `base` is the
     /// folder mesh paths are relative to.
     pub fn from_json(text: &str, file: &str, base: &Path) -> Result<Scene, SceneError> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let desc: SceneDesc = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            invalid(
-                file,
-                if path == "." { "(document)".into() } else { path },
-                e.inner().to_string(),
-            )
-        })?;
-        Self::from_desc(desc, file, base)
+        Self::build(scene_check::parse(text, file, validate)?, file, base)
     }
 
+    /// Validate a description and build the scene.
     pub fn from_desc(desc: SceneDesc, file: &str, base: &Path) -> Result<Scene, SceneError> {
-        let problems = validate(&desc);
-        if !problems.is_empty() {
-            return Err(SceneError::Invalid {
-                file: file.to_string(),
-                problems,
-            });
-        }
-        Self::build(desc, file, base)
+        Self::build(scene_check::validated(desc, file, validate)?, file, base)
     }
 
     fn build(desc: SceneDesc, file: &str, base: &Path) -> Result<Scene, SceneError> {
@@ -250,14 +224,8 @@ impl World for Scene {
         self.geometry.occluded(o, d, self.t_min(), t_max, skip)
     }
 
-    /// Distance along p + t·d to the world sphere (0 outside it).
-    fn world_exit(&self, p: DVec3, d: DVec3) -> f64 {
-        let c = 0.5 * (self.bounds.min + self.bounds.max);
-        let r = WORLD_RADIUS * self.scale;
-        let o = p - c;
-        let b = o.dot(d);
-        let disc = b * b - (o.length_squared() - r * r);
-        if disc <= 0.0 { 0.0 } else { (-b + disc.sqrt()).max(0.0) }
+    fn centre(&self) -> DVec3 {
+        0.5 * (self.bounds.min + self.bounds.max)
     }
 
     fn medium(&self) -> Option<&Medium> {
