@@ -11,10 +11,9 @@
 use super::geometry::{cross, intersect_segment};
 use super::scene::Scene;
 use crate::core::color::Rgb;
-use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
 use crate::core::space::D2;
-use crate::pipeline::delta::{gather, point_lights};
+use crate::pipeline::nee::{LightSample, gather, light_sample, point_lights};
 use crate::pipeline::world::{DirectLight, World};
 use glam::DVec2;
 
@@ -27,19 +26,16 @@ pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, ra
     let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays);
     for l in &scene.collimated_lights {
         let w = -l.direction;
-        let (value, _) = lobe.eval(w);
-        if value == Rgb::ZERO {
-            continue;
-        }
         // The beam reaches p only through its aperture.
-        let Some((t_ap, _)) = intersect_segment(p, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY) else {
-            continue;
-        };
-        *rays += 1;
-        if scene.occluded(p, w, t_ap, skip) {
-            continue;
+        if let Some((dist, _)) = intersect_segment(p, w, l.aperture[0], l.aperture[1], 0.0, f64::INFINITY) {
+            let l = LightSample {
+                w,
+                dist,
+                radiance: l.irradiance,
+                pdf: 1.0,
+            };
+            sum += light_sample(scene, p, lobe, skip, &l, false, rays);
         }
-        sum += value * l.irradiance * scene.transmittance(p, w, t_ap);
     }
     sum
 }
@@ -97,26 +93,19 @@ pub fn emitter_nee(
     }
     let sign = if cross(a, b) >= 0.0 { 1.0 } else { -1.0 };
     let w = DVec2::from_angle(sign * v * theta).rotate(a.normalize());
-    let (value, lobe_pdf) = lobe.eval(w);
-    if value == Rgb::ZERO {
-        return Rgb::ZERO;
-    }
     let e = seg.b - seg.a;
-    let denom = cross(w, e);
-    if denom == 0.0 {
-        return Rgb::ZERO;
-    }
-    let dist = cross(seg.a - p, e) / denom;
+    let dist = cross(seg.a - p, e) / cross(w, e);
     if !(dist > 0.0 && dist.is_finite()) {
         return Rgb::ZERO;
     }
-    *rays += 1;
-    if scene.occluded(p, w, dist, skip) {
-        return Rgb::ZERO;
-    }
-    let light_pdf = scene.emitters.probability(k) / theta;
-    let weight = if mis { power_heuristic(light_pdf, lobe_pdf) } else { 1.0 };
-    value * seg.emission * scene.transmittance(p, w, dist) * (weight / light_pdf)
+    let pdf = scene.emitters.probability(k) / theta;
+    let l = LightSample {
+        w,
+        dist,
+        radiance: seg.emission,
+        pdf,
+    };
+    light_sample(scene, p, lobe, skip, &l, mis, rays)
 }
 
 /// The delta lights visible from `x` (theory.md §2), and the shadow rays this cost.

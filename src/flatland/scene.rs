@@ -25,7 +25,7 @@ pub const DEFAULT_SCENE_JSON: &str = include_str!("../../flatland_scenes/occlude
 pub use crate::scene_check::SceneError;
 
 /// A point light; intensity in W rad⁻¹.
-pub type PointLight = crate::pipeline::delta::PointLight<D2>;
+pub type PointLight = crate::pipeline::nee::PointLight<D2>;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct CollimatedLight {

@@ -22,6 +22,13 @@ pub trait Region<S: Dim>: Clone + std::fmt::Debug + PartialEq + Send + Sync {
     fn pieces(&self, o: S::Vec, d: S::Vec, t_max: f64) -> Self::Pieces;
 }
 
+/// The probability that free-flight sampling (`core::free_flight`: one channel
+/// drawn uniformly, its exponential distance) passes a stretch of transmittance
+/// `tr`: the mean of the channels' transmittances (for a grey medium, T).
+pub fn pass_probability(tr: Rgb) -> f64 {
+    tr.element_sum() / 3.0
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Medium<S: Dim, R> {
     pub sigma_a: Rgb,

@@ -8,13 +8,13 @@
 //! files, cameras or images.
 
 pub mod bvh;
-pub mod delta;
 pub mod derivatives;
 pub mod dim;
 pub mod directions;
 pub mod emitters;
 pub mod lobe;
 pub mod medium;
+pub mod nee;
 pub mod path;
 pub mod placement;
 pub mod probe;

@@ -16,6 +16,7 @@
 
 use super::dim::Dim;
 use super::lobe::Lobe;
+use super::medium::pass_probability;
 use super::world::{Hit, SurfacePoint, VecOf, World};
 use crate::core::color::Rgb;
 use crate::core::free_flight::Flight;
@@ -148,7 +149,8 @@ pub fn radiance_path<W: World>(
             }
             (Flight::Pass { weight }, None) => {
                 first.get_or_insert(FirstEvent::Escape);
-                l += beta * weight * world.escaped(dir, pdf_prev);
+                let pass = |pb: f64| pb * pass_probability(world.transmittance(p, dir, s_max));
+                l += beta * weight * world.escaped(dir, pdf_prev.map(pass));
                 break;
             }
             (Flight::Pass { weight }, Some(h)) => {
@@ -159,7 +161,11 @@ pub fn radiance_path<W: World>(
                     break;
                 }
                 if sp.emission != Rgb::ZERO {
-                    let w = pdf_prev.map_or(1.0, |pb| power_heuristic(pb, world.emitter_pdf(p, h.prim, sp.point)));
+                    // The lobe strategy's density includes passing the medium (see nee).
+                    let w = pdf_prev.map_or(1.0, |pb| {
+                        let pass = pass_probability(world.transmittance(p, dir, h.t));
+                        power_heuristic(pb * pass, world.emitter_pdf(p, h.prim, sp.point))
+                    });
                     l += beta * sp.emission * w;
                 }
                 if sp.reflectance == Rgb::ZERO {

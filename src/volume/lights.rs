@@ -15,8 +15,8 @@ use crate::core::color::Rgb;
 use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
 use crate::core::space::D3;
-use crate::pipeline::delta::{gather, point_lights};
 use crate::pipeline::dim::Dim;
+use crate::pipeline::nee::{LightSample, gather, light_sample, point_lights};
 use crate::pipeline::world::{DirectLight, World};
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
@@ -24,30 +24,18 @@ use std::f64::consts::{PI, TAU};
 /// A path vertex's lobe in 3D.
 pub type Lobe = crate::pipeline::lobe::Lobe<D3>;
 
-/// Transmittance towards infinity along an unoccluded ray (the medium ends at the
-/// world sphere, as for paths that escape).
-#[inline]
-fn transmittance_to_infinity(scene: &Scene, p: DVec3, w: DVec3) -> Rgb {
-    match &scene.medium {
-        None => Rgb::ONE,
-        Some(m) => m.transmittance(p, w, scene.world_exit(p, w)),
-    }
-}
-
 /// Light from delta lights (point lights, suns without a cone) at `p`, weighted by
 /// `lobe`. `skip` is the triangle `p` lies on, if any.
 pub fn delta_lights(scene: &Scene, p: DVec3, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
     let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays);
     for sun in scene.suns.iter().filter(|s| s.is_delta()) {
-        let w = sun.to_sun;
-        let (value, _) = lobe.eval(w);
-        if value == Rgb::ZERO {
-            continue;
-        }
-        *rays += 1;
-        if !scene.occluded(p, w, f64::INFINITY, skip) {
-            sum += value * sun.irradiance * transmittance_to_infinity(scene, p, w);
-        }
+        let l = LightSample {
+            w: sun.to_sun,
+            dist: f64::INFINITY,
+            radiance: sun.irradiance,
+            pdf: 1.0,
+        };
+        sum += light_sample(scene, p, lobe, skip, &l, false, rays);
     }
     sum
 }
@@ -74,17 +62,14 @@ pub fn distant_nee(
     rays: &mut u64,
 ) -> Rgb {
     let mut sum = Rgb::ZERO;
-    let mut one = |w: DVec3, pdf_light: f64, radiance: Rgb, rays: &mut u64| {
-        let (value, pdf_lobe) = lobe.eval(w);
-        if value == Rgb::ZERO {
-            return;
-        }
-        *rays += 1;
-        if scene.occluded(p, w, f64::INFINITY, skip) {
-            return;
-        }
-        let weight = if mis { power_heuristic(pdf_light, pdf_lobe) } else { 1.0 };
-        sum += value * radiance * transmittance_to_infinity(scene, p, w) * (weight / pdf_light);
+    let mut one = |w: DVec3, pdf: f64, radiance: Rgb, rays: &mut u64| {
+        let l = LightSample {
+            w,
+            dist: f64::INFINITY,
+            radiance,
+            pdf,
+        };
+        sum += light_sample(scene, p, lobe, skip, &l, mis, rays);
     };
     if scene.sky != Rgb::ZERO {
         one(D3::sample_uniform(s), 1.0 / (4.0 * PI), scene.sky, rays);
@@ -165,17 +150,15 @@ pub fn emitter_nee(
     if cos_l <= 0.0 {
         return Rgb::ZERO;
     }
-    let (value, pdf_lobe) = lobe.eval(w);
-    if value == Rgb::ZERO {
-        return Rgb::ZERO;
-    }
-    *rays += 1;
-    if scene.occluded(p, w, r * (1.0 - 1e-9), skip) {
-        return Rgb::ZERO;
-    }
-    let pdf_light = scene.emitters.probability(k) / t.area * r2 / cos_l;
-    let weight = if mis { power_heuristic(pdf_light, pdf_lobe) } else { 1.0 };
-    value * surf.emission * scene.transmittance(p, w, r) * (weight / pdf_light)
+    let pdf = scene.emitters.probability(k) / t.area * r2 / cos_l;
+    // Short of the light's own triangle.
+    let l = LightSample {
+        w,
+        dist: r * (1.0 - 1e-9),
+        radiance: surf.emission,
+        pdf,
+    };
+    light_sample(scene, p, lobe, skip, &l, mis, rays)
 }
 
 /// The direct part of L_s (theory.md §2) at a medium point: delta lights and suns
@@ -186,15 +169,14 @@ pub fn direct_part(scene: &Scene, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: 
     for sun in scene.suns.iter().filter(|s| !s.is_delta()) {
         let (u1, u2) = (s.next_f64(), s.next_f64());
         let w = sample_cone(sun.to_sun, sun.cos_max, u1, u2);
-        let (value, _) = lobe.eval(w);
-        if value == Rgb::ZERO {
-            continue;
-        }
-        *rays += 1;
-        if !scene.occluded(p, w, f64::INFINITY, None) {
-            // Uniform in the cone: radiance / pdf = radiance × solid angle = E.
-            sum += value * sun.radiance * sun.solid_angle() * transmittance_to_infinity(scene, p, w);
-        }
+        // Uniform in the cone: pdf = 1 / solid angle.
+        let l = LightSample {
+            w,
+            dist: f64::INFINITY,
+            radiance: sun.radiance,
+            pdf: 1.0 / sun.solid_angle(),
+        };
+        sum += light_sample(scene, p, lobe, None, &l, false, rays);
     }
     sum
 }
@@ -229,7 +211,7 @@ pub fn gather_direct(scene: &Scene, x: DVec3) -> (Vec<DirectLight<D3>>, u64) {
             irradiance: sun.irradiance,
             depth: depth_at(x),
             depth_grad,
-            transmittance: transmittance_to_infinity(scene, x, w),
+            transmittance: scene.transmittance(x, w, scene.world_exit(x, w)),
         });
     }
     (out, rays)

@@ -32,7 +32,7 @@ pub struct Surface {
 }
 
 /// A point light; intensity in W sr⁻¹.
-pub type PointLight = crate::pipeline::delta::PointLight<D3>;
+pub type PointLight = crate::pipeline::nee::PointLight<D3>;
 
 /// A distant light: a delta direction when `cos_max == 1`, else a uniform cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
