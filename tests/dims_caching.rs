@@ -23,6 +23,7 @@ fn hole_free_and_thread_independent<F: Fixture>() {
             assert!(a.record_count > 5, "{what}: {} records", a.record_count);
             assert_eq!(a.records, b.records, "{what}: records differ between 1 and 2 threads");
             assert_eq!(a.values, b.values, "{what}: values differ between 1 and 2 threads");
+            assert_eq!(a.defined, b.defined, "{what}");
             assert!(
                 a.values.iter().all(|v| v.is_finite() && v.min_element() >= 0.0),
                 "{what}"

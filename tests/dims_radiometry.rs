@@ -225,7 +225,7 @@ fn single_scattering_matches_quadrature<F: Fixture>() {
     let est = estimate_with(200_000, 5, 0, |smp| {
         radiance_path(&s, o, d, None, None, &settings, smp, &mut rays).0
     });
-    check(&format!("{}D single scattering", F::DIM), est, Rgb::splat(want), 0.01);
+    check(&format!("{}D single scattering", F::DIM), est, Rgb::splat(want), 0.005);
 }
 
 #[test]

@@ -57,10 +57,12 @@ fn medium_json(spec: &Spec) -> String {
     })
 }
 
-/// A path-traced field (2D) or image (3D): values, per-pixel standard errors, rays.
+/// A path-traced field (2D) or image (3D): values, where they are defined (a 2D
+/// field of L_s is undefined outside the medium), per-pixel standard errors, rays.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
     pub values: Vec<Rgb>,
+    pub defined: Vec<bool>,
     pub std_error: Vec<f64>,
     pub rays: u64,
 }
@@ -69,6 +71,7 @@ pub struct Image {
 #[derive(Clone, Debug)]
 pub struct CachedRun {
     pub values: Vec<Rgb>,
+    pub defined: Vec<bool>,
     /// Every record of every cache, printed (Rust prints floats so that they read
     /// back exactly: equal text is equal bits).
     pub records: String,
@@ -230,6 +233,7 @@ impl Fixture for D2 {
         });
         Image {
             values: r.field.values,
+            defined: r.field.valid,
             std_error: r.std_error,
             rays: r.rays,
         }
@@ -250,6 +254,7 @@ impl Fixture for D2 {
             records: format!("{:?}", f.records),
             record_count: f.record_count(),
             uncovered: f.uncovered_pixels,
+            defined: f.field.valid,
             values: f.field.values,
         }
     }
@@ -353,6 +358,7 @@ impl Fixture for D3 {
         let r = with_threads(threads, || volume::render::render(world, &p, &Progress::new()).unwrap());
         assert_eq!(r.spp, 3);
         Image {
+            defined: vec![true; r.values.len()],
             values: r.values,
             std_error: r.std_error,
             rays: r.rays,
@@ -377,6 +383,7 @@ impl Fixture for D3 {
             records: format!("{records:?}"),
             record_count: r.placement.record_count(),
             uncovered: r.reconstruction.uncovered as usize,
+            defined: vec![true; r.reconstruction.image.values.len()],
             values: r.reconstruction.image.values,
         }
     }
