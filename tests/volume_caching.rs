@@ -1,6 +1,7 @@
 //! 3D radiance caching (issue 6 §4): ours against Jarosz et al. 2008 at equal cache
-//! count, agreement with the path tracer, determinism, coverage, records files and
-//! extreme parameters.
+//! count, agreement with the path tracer, records files and extreme parameters.
+//! Hole-free, thread-independent placement is checked in both dimensions in
+//! `dims_caching.rs`.
 
 use std::path::Path;
 use volcache::core::color::{Rgb, luminance};
@@ -157,35 +158,17 @@ fn cached_and_path_traced_images_agree_on_average() {
     }
 }
 
-/// Placement and reconstruction give the same records and image bit for bit with
-/// one and two threads, leave no query point uncovered, and a records file
-/// round-trips exactly (the reconstruction from it is the same image).
+/// A records file round-trips exactly (the reconstruction from it is the same
+/// image) and refuses another image size or scene with the reason. (Hole-free,
+/// thread-independent placement is checked in both dimensions in `dims_caching.rs`.)
 #[test]
-fn deterministic_hole_free_and_records_round_trip() {
+fn records_file_round_trips() {
     let s = load("fog_box.json");
     let p = params(&s, 20, 20, 2, 48.0);
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
         let cs = settings(method, &s, 256, 8, 3);
-        let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap())
-        };
-        let (a, b) = (run(1), run(2));
-        assert_eq!(
-            a.placement.caches[0].records(),
-            b.placement.caches[0].records(),
-            "{method:?}"
-        );
-        assert_eq!(
-            a.reconstruction.image.values, b.reconstruction.image.values,
-            "{method:?}"
-        );
-        assert_eq!(a.reconstruction.uncovered, 0);
-        assert!(
-            a.placement.record_count() > 5,
-            "{method:?}: {} records",
-            a.placement.record_count()
-        );
+        let a = render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
+        assert!(a.placement.record_count() > 5, "{method:?}");
         let file = RecordsFile::from_placement(&s, &p, method, &a.placement);
         let text = serde_json::to_string(&file).unwrap();
         let (back, cache) = RecordsFile::parse(&text, "records.json").unwrap();

@@ -1,12 +1,13 @@
-//! 3D radiometry of the reference path tracer against closed forms, quadrature and
-//! published values (`../shared/design/benchmarks.md`, 3D), each within four
-//! standard errors with standard errors below 1%; and thread-independent images.
+//! 3D radiometry of the reference path tracer against published values
+//! (`../shared/design/benchmarks.md`, 3D) and closed forms of 3D lights (sky, sun
+//! cone, area light), each within four standard errors with standard errors below
+//! 1%; crops. The checks that hold in both dimensions (furnace, point light, single
+//! scattering, thread independence) are in `dims_radiometry.rs`.
 
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::path::Path;
 use volcache::core::color::Rgb;
-use volcache::core::phase::Hg3;
 use volcache::pipeline::path::{Query, Settings, estimate_with as estimate, radiance_path, sample_query};
 use volcache::progress::Progress;
 use volcache::volume::render::{RenderParams, render};
@@ -36,118 +37,6 @@ fn check(what: &str, (mean, se): (Rgb, Rgb), want: Rgb) {
             (mean[c] - want[c]).abs() / se[c]
         );
     }
-}
-
-/// A diffuse quad lit by a point light in vacuum: L = (ρ/π) I cosθ / r², exactly
-/// (NEE is deterministic and the bounce escapes).
-#[test]
-fn point_light_on_a_diffuse_quad_is_exact() {
-    let s = scene(&format!(
-        r#"{{ {CAMERA}, "shapes": [{{"quad": {{"origin": [-5, 0, -5], "u": [0, 0, 10], "v": [10, 0, 0]}},
-            "reflectance": [0.5, 0.25, 0.8], "two_sided": false}}],
-            "lights": [{{"point": {{"position": [0.3, 1.2, 0.2], "intensity": [2, 3, 1]}}}}] }}"#
-    ));
-    let (cam, y) = (DVec3::new(-1.0, 2.0, 2.0), DVec3::new(0.1, 0.0, -0.2));
-    let d = DVec3::new(0.3, 1.2, 0.2) - y;
-    let want = Rgb::new(0.5, 0.25, 0.8) / PI * Rgb::new(2.0, 3.0, 1.0) * (d.y / d.length()) / d.length_squared();
-    let mut rays = 0;
-    for k in 0..16 {
-        let mut smp = volcache::core::rng::Sampler::new(1, k);
-        let l = radiance_path(
-            &s,
-            cam,
-            (y - cam).normalize(),
-            None,
-            None,
-            &Settings::default(),
-            &mut smp,
-            &mut rays,
-        )
-        .0;
-        assert!(
-            (l - want).abs().max_element() < 1e-12 * want.max_element(),
-            "{l} vs {want}"
-        );
-    }
-}
-
-/// Closed box whose walls emit L_e and reflect ρ, filled with a non-absorbing
-/// anisotropic medium: L = L_e / (1 − ρ) in every direction.
-#[test]
-fn furnace() {
-    let wall = |o: [f64; 3], u: [f64; 3], v: [f64; 3]| {
-        format!(
-            r#"{{"quad": {{"origin": {o:?}, "u": {u:?}, "v": {v:?}}}, "reflectance": [0.6, 0.5, 0.3], "emission": [0.4, 0.5, 0.7]}}"#
-        )
-    };
-    let walls = [
-        wall([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        wall([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        wall([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-        wall([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-        wall([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        wall([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-    ]
-    .join(",");
-    let s = scene(&format!(
-        r#"{{ "camera": {{"position": [0, 0, 0.5], "look_at": [0, 0, 0], "fov_deg": 40}}, "shapes": [{walls}],
-            "medium": {{"sigma_a": 0, "sigma_s": [1.0, 0.8, 0.6], "g": 0.5}} }}"#
-    ));
-    let settings = Settings {
-        max_depth: 100_000,
-        rr_depth: 3,
-    };
-    let x = DVec3::new(0.2, -0.3, 0.1);
-    let mut rays = 0;
-    let est = estimate(160_000, 3, 0, |smp| {
-        let w = DVec3::new(smp.next_f64() - 0.5, smp.next_f64() - 0.5, smp.next_f64() - 0.5).normalize();
-        radiance_path(&s, x, w, None, None, &settings, smp, &mut rays).0
-    });
-    check("furnace", est, Rgb::new(0.4 / 0.4, 0.5 / 0.5, 0.7 / 0.7));
-}
-
-/// Single scattering (max_depth 1) from a point light along one ray, g = 0.5,
-/// against Simpson quadrature of σ_s e^{−σ_t t} f(μ) I e^{−σ_t r} / r² dt.
-#[test]
-fn single_scattering_matches_quadrature() {
-    let (sa, ss, g, i) = (0.3, 0.5, 0.5, 2.0);
-    let s = scene(&format!(
-        r#"{{ {CAMERA}, "lights": [{{"point": {{"position": [0, 1, 0], "intensity": {i}}}}}],
-            "medium": {{"sigma_a": {sa}, "sigma_s": {ss}, "g": {g}}} }}"#
-    ));
-    let (o, d, light) = (DVec3::new(-2.0, 0.0, 0.0), DVec3::X, DVec3::Y);
-    let hg = Hg3::new(g);
-    let f = |t: f64| {
-        let p = o + d * t;
-        let to = light - p;
-        let r = to.length();
-        ss * (-(sa + ss) * t).exp() * hg.eval(d, to / r) * i * (-(sa + ss) * r).exp() / (r * r)
-    };
-    let (n, len) = (200_000, 60.0);
-    let h = len / n as f64;
-    let want = (0..=n)
-        .map(|k| {
-            f(k as f64 * h)
-                * if k == 0 || k == n {
-                    1.0
-                } else if k % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                }
-        })
-        .sum::<f64>()
-        * h
-        / 3.0;
-    let settings = Settings {
-        max_depth: 1,
-        rr_depth: 3,
-    };
-    let mut rays = 0;
-    let est = estimate(200_000, 5, 0, |smp| {
-        radiance_path(&s, o, d, None, None, &settings, smp, &mut rays).0
-    });
-    check("single scattering", est, Rgb::splat(want));
 }
 
 /// Reflectance or transmittance of a medium box under a collimated beam (a sun of
@@ -193,28 +82,21 @@ fn slab_reflectance_and_transmittance() {
     );
 }
 
+/// A crop renders exactly the pixels of the full image (thread independence is
+/// checked in both dimensions in `dims_radiometry.rs`).
 #[test]
-fn images_are_identical_with_one_and_two_threads() {
+fn a_crop_renders_the_same_pixels_as_the_full_image() {
     let s = Scene::load(Path::new("scenes3d/fog_box.json")).unwrap();
     let mut p = RenderParams::from_scene(&s);
     (p.width, p.height, p.spp) = (40, 30, 3);
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&s, &p, &Progress::new()).unwrap())
-    };
-    let (a, b) = (run(1), run(2));
-    assert_eq!(a.spp, 3);
-    assert!(a.values.iter().any(|v| v.max_element() > 0.0));
-    assert_eq!(a.values, b.values);
-    assert_eq!(a.std_error, b.std_error);
-    assert_eq!(a.rays, b.rays);
-    // A crop renders exactly the same pixels as the full image.
+    let full = render(&s, &p, &Progress::new()).unwrap();
+    assert!(full.values.iter().any(|v| v.max_element() > 0.0));
     let mut c = p.clone();
     c.crop = Some([10, 5, 25, 20]);
     let crop = render(&s, &c, &Progress::new()).unwrap();
     for j in 0..15 {
         for i in 0..15 {
-            assert_eq!(crop.values[j * 15 + i], a.values[(j + 5) * 40 + i + 10]);
+            assert_eq!(crop.values[j * 15 + i], full.values[(j + 5) * 40 + i + 10]);
         }
     }
 }

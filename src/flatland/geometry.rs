@@ -117,8 +117,6 @@ pub type SegmentSet = Geometry<D2, Segment>;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::core::rng::Sampler;
-    use crate::pipeline::bvh::Accel;
 
     fn seg(a: (f64, f64), b: (f64, f64)) -> Segment {
         Segment::new(DVec2::new(a.0, a.1), DVec2::new(b.0, b.1), Rgb::ZERO, Rgb::ZERO, true)
@@ -143,39 +141,6 @@ mod tests {
         for &(x, y) in &pts {
             let d = DVec2::new(x, y).normalize();
             assert!(set.closest_hit(DVec2::ZERO, d, 2e-10, f64::INFINITY, None).is_some());
-        }
-    }
-
-    /// BVH answers equal brute force on random rays in a random soup of segments.
-    #[test]
-    fn bvh_matches_linear_scan() {
-        let mut s = Sampler::new(3, 0);
-        let segs: Vec<Segment> = (0..500)
-            .map(|_| {
-                let c = DVec2::new(s.next_f64() * 20.0 - 10.0, s.next_f64() * 20.0 - 10.0);
-                let d = DVec2::from_angle(s.next_f64() * 6.3) * (0.05 + s.next_f64());
-                Segment::new(c - d, c + d, Rgb::ZERO, Rgb::ZERO, true)
-            })
-            .collect();
-        let lin = SegmentSet::with_accel(segs.clone(), Accel::Linear);
-        let bvh = SegmentSet::with_accel(segs, Accel::Bvh);
-        let t_min = 2e-9;
-        for _ in 0..5000 {
-            let o = DVec2::new(s.next_f64() * 24.0 - 12.0, s.next_f64() * 24.0 - 12.0);
-            let d = DVec2::from_angle(s.next_f64() * 6.3);
-            let t_max = if s.next_f64() < 0.5 {
-                f64::INFINITY
-            } else {
-                s.next_f64() * 10.0
-            };
-            assert_eq!(
-                lin.closest_hit(o, d, t_min, t_max, None),
-                bvh.closest_hit(o, d, t_min, t_max, None)
-            );
-            assert_eq!(
-                lin.occluded(o, d, t_min, t_max, Some(7)),
-                bvh.occluded(o, d, t_min, t_max, Some(7))
-            );
         }
     }
 }

@@ -49,3 +49,71 @@ impl Emitters {
         self.prims.binary_search(&prim).ok()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Four emitters: white, a faint blue one, one of zero measure (never picked),
+    /// and a bright short one.
+    fn table() -> (Emitters, Vec<f64>) {
+        let e = [
+            (2, Rgb::splat(1.0), 2.0),
+            (5, Rgb::new(0.0, 0.0, 1e-6), 1.0),
+            (6, Rgb::splat(3.0), 0.0),
+            (9, Rgb::new(4.0, 2.0, 1.0), 0.5),
+        ];
+        // luminance × measure (the floor at 10⁻³ of the brightest channel does not
+        // bind for non-negative colours: luminance ≥ 0.0722 × the brightest).
+        let w: Vec<f64> = e.iter().map(|&(_, c, m)| luminance(c) * m).collect();
+        let total: f64 = w.iter().sum();
+        (Emitters::new(e.into_iter()), w.iter().map(|x| x / total).collect())
+    }
+
+    #[test]
+    fn probabilities_follow_luminance_times_measure() {
+        let (em, want) = table();
+        assert_eq!(em.prims, vec![2, 5, 6, 9]);
+        for (k, p) in want.iter().enumerate() {
+            assert!(
+                (em.probability(k) - p).abs() < 1e-15,
+                "emitter {k}: {} vs {p}",
+                em.probability(k)
+            );
+        }
+        assert!(em.probability(1) > 0.0);
+        assert_eq!(em.probability(2), 0.0);
+        assert!(((0..4).map(|k| em.probability(k)).sum::<f64>() - 1.0).abs() < 1e-15);
+        for (k, &prim) in em.prims.iter().enumerate() {
+            assert_eq!(em.find(prim), Some(k));
+        }
+        assert_eq!(em.find(3), None);
+        assert!(!em.is_empty() && Emitters::new(std::iter::empty()).is_empty());
+    }
+
+    /// Stratified numbers pick each emitter as often as its probability says (to one
+    /// stratum), an emitter of probability zero never, and u at the ends of [0, 1)
+    /// the first and the last.
+    #[test]
+    fn pick_inverts_the_table() {
+        let (em, want) = table();
+        let n = 1_000_000;
+        let mut counts = [0usize; 4];
+        for i in 0..n {
+            let (k, prim) = em.pick((i as f64 + 0.5) / n as f64);
+            assert_eq!(prim, em.prims[k]);
+            counts[k] += 1;
+        }
+        for k in 0..4 {
+            let expected = want[k] * n as f64;
+            assert!(
+                (counts[k] as f64 - expected).abs() <= 1.0,
+                "emitter {k}: {} vs {expected}",
+                counts[k]
+            );
+        }
+        assert_eq!(counts[2], 0);
+        assert_eq!(em.pick(0.0).0, 0);
+        assert_eq!(em.pick(1.0 - f64::EPSILON).0, 3);
+    }
+}

@@ -20,4 +20,6 @@ pub mod placement;
 pub mod probe;
 pub mod proxy;
 pub mod record;
+#[cfg(test)]
+mod testing;
 pub mod world;
