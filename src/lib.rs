@@ -21,4 +21,5 @@ pub mod output;
 pub mod pipeline;
 pub mod progress;
 pub mod scene_check;
+pub mod study;
 pub mod volume;
