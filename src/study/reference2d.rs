@@ -92,10 +92,10 @@ mod tests {
             spp: 2,
             ..FieldParams::from_scene(&scene)
         };
-        let mut renders = 0;
-        let mut get = |fp: &FieldParams| {
+        let renders = std::cell::Cell::new(0);
+        let get = |fp: &FieldParams| {
             reference_field(&scene, fp, dir.path(), |_| {
-                renders += 1;
+                renders.set(renders.get() + 1);
                 Arc::new(Progress::new())
             })
             .unwrap()
@@ -108,7 +108,6 @@ mod tests {
         assert_eq!((info_back.key, info_back.spp), (info.key, 2));
         let (_, other) = get(&FieldParams { seed: 2, ..fp.clone() });
         assert!(!other.from_disk);
-        drop(get);
-        assert_eq!(renders, 2);
+        assert_eq!(renders.get(), 2, "a progress handle only for a render");
     }
 }
