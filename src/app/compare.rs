@@ -12,7 +12,7 @@ use super::jobs::{Job, Notify, Priority, Reporter};
 use crate::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo};
 use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use crate::flatland::scene::Scene;
-use crate::study::field_runs::{TimedRun, eps_for_count, timed_run};
+use crate::study::field_runs::{self, TimedRun, eps_for_count, timed_run};
 use crate::study::seeds::reference_seed;
 use std::sync::Arc;
 
@@ -63,11 +63,7 @@ impl CompareParams {
     /// The cache settings of `method` (as `volcache caches`' defaults with these
     /// rays, steps and seed).
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
-        let mut cs = CacheSettings::new::<crate::core::space::D2>(method, 0.05, fp.settings);
-        cs.probe.rays = self.rays.max(3);
-        cs.probe.steps = self.steps.max(1);
-        cs.seed = fp.seed;
-        cs
+        field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps)
     }
 
     /// The reference's field parameters (the seed of `figure compare`).

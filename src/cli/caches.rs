@@ -12,7 +12,7 @@ use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::scene::Scene;
 use volcache::output::{write_exr, write_json, write_png};
 use volcache::progress::{Cancelled, Progress};
-use volcache::study::field_runs::{FieldMethod, MethodRun, cache_run, pt_run};
+use volcache::study::field_runs::{self, FieldMethod, MethodRun, cache_run, pt_run};
 use volcache::study::reference2d::{ReferenceInfo, reference_field};
 use volcache::study::seeds::reference_seed;
 
@@ -78,13 +78,11 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
     fp
 }
 
+/// The options' cache settings (`fp.seed` is `--seed`, see [`field_params`]).
 pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
-    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, a.eps.unwrap_or(0.05), fp.settings);
-    cs.probe.rays = a.rays.max(3);
-    cs.probe.steps = a.steps.max(1);
+    let mut cs = field_runs::cache_settings(method, a.eps.unwrap_or(0.05), fp, a.rays, a.steps);
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
-    cs.seed = a.seed;
     cs
 }
 

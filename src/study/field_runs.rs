@@ -6,6 +6,7 @@
 //! app's compare view all run it.
 
 use crate::core::metric::CacheMethod;
+use crate::core::space::D2;
 use crate::flatland::cached_field::{CacheSettings, CachedField, RecordInfo, RecordMemo, render_cached};
 use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use crate::flatland::scene::Scene;
@@ -66,6 +67,18 @@ impl MethodRun {
     pub fn all_records(&self) -> Vec<RecordInfo> {
         self.record_list.iter().flatten().cloned().collect()
     }
+}
+
+/// The settings of `method` for a field of `fp`: the library's defaults with `rays`
+/// directions (at least 3) and `steps` march samples (at least 1) per record,
+/// seeded with the field's seed. `volcache caches` and the app's compare view
+/// both start from these, so their records are the same.
+pub fn cache_settings(method: CacheMethod, eps: f64, fp: &FieldParams, rays: usize, steps: usize) -> CacheSettings {
+    let mut cs = CacheSettings::new::<D2>(method, eps, fp.settings);
+    cs.probe.rays = rays.max(3);
+    cs.probe.steps = steps.max(1);
+    cs.seed = fp.seed;
+    cs
 }
 
 /// What the search for ε found.
@@ -177,7 +190,6 @@ pub fn pt_run(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::core::space::D2;
 
     fn tiny() -> (Scene, FieldParams, CacheSettings) {
         let scene = Scene::default_scene();
@@ -186,8 +198,8 @@ mod tests {
             height: 12,
             ..FieldParams::from_scene(&scene)
         };
-        let mut cs = CacheSettings::new::<D2>(CacheMethod::Ours, 0.05, fp.settings);
-        (cs.probe.rays, cs.probe.steps) = (24, 2);
+        let cs = cache_settings(CacheMethod::Ours, 0.05, &fp, 24, 2);
+        assert_eq!((cs.probe.rays, cs.probe.steps, cs.seed), (24, 2, fp.seed));
         (scene, fp, cs)
     }
 
