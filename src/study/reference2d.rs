@@ -2,10 +2,9 @@
 //! in the reference store ([`super::stored`]) so sweeps and comparisons do not
 //! recompute them.
 
-use super::stored::{entry_path, read_image, store_key, write_image};
+use super::stored::{read_image, read_info, store_key, write_image, write_info};
 use crate::flatland::field::{Field, FieldParams, render_field};
 use crate::flatland::scene::Scene;
-use crate::output::write_json;
 use crate::progress::Progress;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -53,15 +52,14 @@ pub fn reference_field<P: AsRef<Progress>>(
     };
     let f = &r.field;
     write_image(dir, &key, f.width, f.height, &f.values, Some(&f.valid))?;
-    write_json(&entry_path(dir, &key, "json"), &info)?;
+    write_info(dir, &key, &info)?;
     Ok((r.field, info))
 }
 
 /// The stored field of `key`, exactly as rendered: its values at full precision,
 /// and where it is defined recomputed as the render decides it.
 fn stored_field(scene: &Scene, fp: &FieldParams, dir: &Path, key: &str) -> Option<(Field, ReferenceInfo)> {
-    let text = std::fs::read_to_string(entry_path(dir, key, "json")).ok()?;
-    let mut info: ReferenceInfo = serde_json::from_str(&text).ok()?;
+    let mut info: ReferenceInfo = read_info(dir, key)?;
     let values = read_image(dir, key, fp.width, fp.height)?;
     let mut field = Field::new(fp.width, fp.height, scene.domain_min, scene.domain_max);
     let q = fp.query();

@@ -1,8 +1,7 @@
 //! Reference images (3D): converged path-traced images with their medium part, kept
 //! in the reference store ([`super::stored`]) between runs.
 
-use super::stored::{entry_path, read_image, store_key, write_image};
-use crate::output::write_json;
+use super::stored::{read_image, read_info, store_key, write_image, write_info};
 use crate::progress::Progress;
 use crate::volume::render::{RenderParams, Rendered, render};
 use crate::volume::scene::Scene;
@@ -53,15 +52,14 @@ pub fn reference_image<P: AsRef<Progress>>(
     };
     write_image(dir, &key, w, h, &img.values, None)?;
     write_image(dir, &medium_name(&key), w, h, &img.medium, None)?;
-    write_json(&entry_path(dir, &key, "json"), &info)?;
+    write_info(dir, &key, &info)?;
     Ok((img, info))
 }
 
 /// The stored image of `key` with its medium part, at full precision (its noise
 /// and rays are not kept: a reference is only compared against).
 fn stored_image(dir: &Path, key: &str, w: usize, h: usize) -> Option<(Rendered, ReferenceInfo3d)> {
-    let text = std::fs::read_to_string(entry_path(dir, key, "json")).ok()?;
-    let mut info: ReferenceInfo3d = serde_json::from_str(&text).ok()?;
+    let mut info: ReferenceInfo3d = read_info(dir, key)?;
     let values = read_image(dir, key, w, h)?;
     let medium = read_image(dir, &medium_name(key), w, h)?;
     info.from_disk = true;

@@ -13,9 +13,10 @@
 
 use crate::core::color::Rgb;
 use crate::core::rng::fnv1a;
-use crate::output::{encode_exr, image_field, write_atomic};
+use crate::output::{encode_exr, image_field, write_atomic, write_json};
 use anyhow::Context;
 use serde::Serialize;
+use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"VCRGB64\n";
@@ -35,6 +36,17 @@ pub fn store_key(desc: &impl Serialize, params: &impl Serialize) -> String {
 /// `<dir>/<name>.<ext>`.
 pub fn entry_path(dir: &Path, name: &str, ext: &str) -> PathBuf {
     dir.join(format!("{name}.{ext}"))
+}
+
+/// What `<dir>/<name>.json` says about the entry, if it is there and reads as a `T`.
+pub fn read_info<T: DeserializeOwned>(dir: &Path, name: &str) -> Option<T> {
+    let text = std::fs::read_to_string(entry_path(dir, name, "json")).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// Write `<dir>/<name>.json`, atomically.
+pub fn write_info(dir: &Path, name: &str, info: &impl Serialize) -> anyhow::Result<()> {
+    write_json(&entry_path(dir, name, "json"), info)
 }
 
 /// The `.rgb64` bytes of a `width` × `height` image.
