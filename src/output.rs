@@ -65,6 +65,14 @@ pub fn write_png(path: &Path, pixmap: &tiny_skia::Pixmap) -> anyhow::Result<()> 
     write_atomic(path, &bytes)
 }
 
+/// A rendered image (row 0 on top) as the writers' [`Field`]; its world rectangle
+/// is unused.
+pub fn image_field(width: usize, height: usize, values: &[crate::core::color::Rgb]) -> Field {
+    let mut f = Field::new(width, height, glam::DVec2::ZERO, glam::DVec2::ONE);
+    f.values.copy_from_slice(values);
+    f
+}
+
 /// Encode a field as a linear RGB float32 EXR in memory.
 pub fn encode_exr(field: &Field) -> anyhow::Result<Vec<u8>> {
     use exr::prelude::*;

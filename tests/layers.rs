@@ -1,90 +1,96 @@
-//! The layers of ARCHITECTURE.md, checked against the code: each module of `src/`
-//! may name (`crate::x`, or `volcache::x` from the binary) only the modules below it.
-//! A new arrow back up, or between the two worlds, fails here.
+//! The module graph keeps its shape (README, "Architecture"): no file imports a file
+//! of a higher layer, and no files import each other in a circle. Read from the
+//! source text: every `crate::`, `super::` and `volcache::` path outside test
+//! modules, resolved to the longest module path that is a file. `mod.rs` and
+//! `lib.rs` only declare and re-export, so they are not part of the graph.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// Every top-level module and what it may use.
-const LAYERS: &[(&str, &[&str])] = &[
-    ("core", &[]),
-    ("progress", &[]),
-    ("scene_check", &["core"]),
-    ("pipeline", &["core", "progress"]),
-    ("flatland", &["core", "progress", "scene_check", "pipeline"]),
-    ("volume", &["core", "progress", "scene_check", "pipeline"]),
-    ("output", &["core", "flatland", "volume"]),
-    ("figure", &["core", "pipeline", "flatland", "volume", "output"]),
-    (
-        "app",
-        &[
-            "core",
-            "progress",
-            "scene_check",
-            "pipeline",
-            "flatland",
-            "volume",
-            "output",
-            "figure",
-        ],
-    ),
-    (
-        "cli",
-        &[
-            "core",
-            "progress",
-            "scene_check",
-            "pipeline",
-            "flatland",
-            "volume",
-            "output",
-            "figure",
-            "app",
-        ],
-    ),
+/// Layers from the ground up; a file may import its own layer and those below.
+/// `study` (the experiment protocols) runs `flatland` and `volume` and writes
+/// through `output`; `figure` draws what it is handed; `app` and `cli` orchestrate.
+const LAYERS: [&[&str]; 7] = [
+    &["core", "progress"],
+    &["pipeline", "scene_check"],
+    &["flatland", "volume"],
+    &["output", "study"],
+    &["figure"],
+    &["app"],
+    &["cli", "main"],
 ];
 
-fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            rust_files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
+fn layer(module: &str) -> usize {
+    let top = module.split("::").next().unwrap_or_default();
+    LAYERS
+        .iter()
+        .position(|l| l.contains(&top))
+        .unwrap_or_else(|| panic!("`{top}` is in no layer: add it to LAYERS"))
+}
+
+/// Module path ("cli::figure") → source text without test modules and comments.
+fn sources() -> BTreeMap<String, String> {
+    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push(p);
+            }
         }
     }
-}
-
-/// The top-level module a source file belongs to (`main.rs` is the CLI's).
-fn module_of(src: &Path, file: &Path) -> String {
-    let rel = file.strip_prefix(src).unwrap();
-    let first = rel
-        .components()
-        .next()
-        .unwrap()
-        .as_os_str()
-        .to_string_lossy()
-        .to_string();
-    match first.trim_end_matches(".rs") {
-        "main" => "cli".into(),
-        m => m.into(),
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    walk(&src, &mut files);
+    let mut out = BTreeMap::new();
+    for f in files {
+        let rel = f.strip_prefix(&src).unwrap().with_extension("");
+        let parts: Vec<String> = rel.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+        let text = std::fs::read_to_string(&f).unwrap();
+        // Test-only files: `#[path]` test modules and `#[cfg(test)] mod x;` helpers.
+        let name = parts.last().unwrap();
+        let test_only =
+            name.ends_with("_tests") || ["core/testing", "figure/synthetic"].contains(&parts.join("/").as_str());
+        if matches!(name.as_str(), "mod" | "lib") || test_only {
+            continue;
+        }
+        let code = text.split("#[cfg(test)]").next().unwrap();
+        let code: String = code
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        out.insert(parts.join("::"), code);
     }
+    out
 }
 
-/// Top-level modules named in code (comments stripped: prose may name anything).
-fn named(text: &str) -> BTreeSet<String> {
+/// The files a file imports.
+fn imports(module: &str, code: &str, files: &BTreeMap<String, String>) -> BTreeSet<String> {
+    let mut parent: Vec<&str> = module.split("::").collect();
+    parent.pop();
     let mut out = BTreeSet::new();
-    for line in text.lines() {
-        let code = line.split("//").next().unwrap();
-        for prefix in ["crate::", "volcache::"] {
-            let mut rest = code;
-            while let Some(i) = rest.find(prefix) {
-                rest = &rest[i + prefix.len()..];
-                let name: String = rest
-                    .chars()
-                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                    .collect();
-                out.insert(name);
+    for (prefix, base) in [("crate::", vec![]), ("volcache::", vec![]), ("super::", parent)] {
+        for (i, _) in code.match_indices(prefix) {
+            // A path continues an identifier only at its start (not `xcrate::`).
+            if code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_') {
+                continue;
+            }
+            let rest = &code[i + prefix.len()..];
+            let end = rest
+                .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
+                .unwrap_or(rest.len());
+            let mut path: Vec<&str> = base.clone();
+            path.extend(rest[..end].split("::").filter(|s| !s.is_empty()));
+            if let Some(k) = (1..=path.len())
+                .rev()
+                .find(|&k| files.contains_key(&path[..k].join("::")))
+            {
+                let target = path[..k].join("::");
+                if target != module {
+                    out.insert(target);
+                }
             }
         }
     }
@@ -92,26 +98,74 @@ fn named(text: &str) -> BTreeSet<String> {
 }
 
 #[test]
-fn no_module_uses_a_layer_above_it_or_beside_it() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    let mut wrong = Vec::new();
-    for f in &files {
-        let m = module_of(&src, f);
-        if m == "lib" {
-            continue;
-        }
-        let allowed = LAYERS
-            .iter()
-            .find(|(name, _)| *name == m)
-            .unwrap_or_else(|| panic!("{}: module {m} has no layer in this test", f.display()))
-            .1;
-        for used in named(&std::fs::read_to_string(f).unwrap()) {
-            if used != m && LAYERS.iter().any(|(n, _)| *n == used) && !allowed.contains(&used.as_str()) {
-                wrong.push(format!("{} ({m}) uses {used}", f.strip_prefix(&src).unwrap().display()));
+fn no_import_runs_back_up_a_layer() {
+    let files = sources();
+    assert!(
+        files.len() > 100 && files.contains_key("study::stored"),
+        "{} files",
+        files.len()
+    );
+    let mut upward = Vec::new();
+    for (m, code) in &files {
+        for t in imports(m, code, &files) {
+            if layer(&t) > layer(m) {
+                upward.push(format!("{m} -> {t}"));
             }
         }
     }
-    assert!(wrong.is_empty(), "imports against the layers:\n{}", wrong.join("\n"));
+    assert!(upward.is_empty(), "imports of a higher layer:\n{}", upward.join("\n"));
+}
+
+#[test]
+fn no_files_import_each_other_in_a_circle() {
+    let files = sources();
+    let graph: BTreeMap<&String, BTreeSet<String>> = files.iter().map(|(m, c)| (m, imports(m, c, &files))).collect();
+    // Depth-first search; a back edge to a file on the current path closes a circle.
+    fn visit<'a>(
+        m: &'a String,
+        graph: &'a BTreeMap<&String, BTreeSet<String>>,
+        state: &mut BTreeMap<&'a String, bool>,
+        path: &mut Vec<&'a String>,
+        circles: &mut Vec<String>,
+    ) {
+        state.insert(m, true);
+        path.push(m);
+        for t in &graph[m] {
+            match state.get(t) {
+                Some(true) => {
+                    let start = path.iter().position(|p| *p == t).unwrap();
+                    let names: Vec<&str> = path[start..].iter().map(|s| s.as_str()).collect();
+                    circles.push(format!("{} -> {t}", names.join(" -> ")));
+                }
+                Some(false) => {}
+                None => visit(t, graph, state, path, circles),
+            }
+        }
+        path.pop();
+        state.insert(m, false);
+    }
+    let (mut state, mut circles) = (BTreeMap::new(), Vec::new());
+    for m in graph.keys() {
+        if !state.contains_key(*m) {
+            visit(m, &graph, &mut state, &mut Vec::new(), &mut circles);
+        }
+    }
+    assert!(circles.is_empty(), "import circles:\n{}", circles.join("\n"));
+}
+
+/// The two worlds share one method (`pipeline`) and never each other: 2D code does
+/// not name `volume`, 3D code does not name `flatland`.
+#[test]
+fn the_two_worlds_do_not_import_each_other() {
+    let files = sources();
+    let mut across = Vec::new();
+    for (m, code) in &files {
+        for t in imports(m, code, &files) {
+            let (a, b) = (m.split("::").next().unwrap(), t.split("::").next().unwrap());
+            if (a, b) == ("flatland", "volume") || (a, b) == ("volume", "flatland") {
+                across.push(format!("{m} -> {t}"));
+            }
+        }
+    }
+    assert!(across.is_empty(), "imports between the worlds:\n{}", across.join("\n"));
 }

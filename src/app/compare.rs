@@ -1,16 +1,19 @@
 //! The compare view's computation: a reference field and two cache methods (ours,
-//! Jarosz 2008) on the same scene at equal cache count, as `volcache figure compare`
-//! composes them: `render_field` for the reference (seed ^ 0x5EED), then per method
-//! `render_with_count` to find ε and a fresh, timed `render_cached` at that ε (the
-//! search's memoised light fields would hide its cost), and `field_errors` against
-//! the reference. The field settings are the scene's own (as the command line's),
-//! at the compare resolution, so [`compare_command`] reproduces the numbers.
+//! Jarosz 2008) on the same scene at equal cache count, by the protocol `volcache
+//! figure compare` runs ([`crate::study::field_runs`]): `render_field` for the
+//! reference (its own seed, [`reference_seed`]), then per method the search for ε
+//! ([`eps_for_count`]) and a fresh, timed run at it ([`timed_run`]), and
+//! `field_errors` against the reference. The field settings are the scene's own (as
+//! the command line's), at the compare resolution, so [`compare_command`] reproduces
+//! the numbers.
 
 use super::command::shell_quote;
 use super::jobs::{Job, Notify, Priority, Reporter};
-use crate::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached};
+use crate::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo};
 use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use crate::flatland::scene::Scene;
+use crate::study::field_runs::{self, TimedRun, eps_for_count, timed_run};
+use crate::study::seeds::reference_seed;
 use std::sync::Arc;
 
 /// The methods compared, in the order shown.
@@ -60,18 +63,14 @@ impl CompareParams {
     /// The cache settings of `method` (as `volcache caches`' defaults with these
     /// rays, steps and seed).
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
-        let mut cs = CacheSettings::new::<crate::core::space::D2>(method, 0.05, fp.settings);
-        cs.probe.rays = self.rays.max(3);
-        cs.probe.steps = self.steps.max(1);
-        cs.seed = fp.seed;
-        cs
+        field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps)
     }
 
     /// The reference's field parameters (the seed of `figure compare`).
     pub fn reference_params(&self, fp: &FieldParams) -> FieldParams {
         FieldParams {
             spp: self.ref_spp.max(1),
-            seed: fp.seed ^ 0x5EED,
+            seed: reference_seed(fp.seed),
             ..fp.clone()
         }
     }
@@ -168,14 +167,12 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
                 let cs = params.cache_settings(method, &fp);
                 let name = method_label(method);
                 r.stage(format!("compare: {name}, searching ε for {target} records"));
-                let mut memo = RecordMemo::new();
-                let eps = render_cached(&scene, &fp, &cs, Some(target), &mut memo, r.progress())?.eps;
-                r.add_rays(memo.values().map(|d| d.rays).sum());
+                let found = eps_for_count(&scene, &fp, &cs, target, r.progress())?;
+                let eps = found.eps;
+                r.add_rays(found.rays);
                 r.stage(format!("compare: {name}, timed run at ε = {eps:.3e}"));
-                let start = std::time::Instant::now();
                 let cs = CacheSettings { eps, ..cs };
-                let f = render_cached(&scene, &fp, &cs, None, &mut RecordMemo::new(), r.progress())?;
-                let seconds = start.elapsed().as_secs_f64();
+                let TimedRun { cached: f, seconds } = timed_run(&scene, &fp, &cs, r.progress())?;
                 let rays = f.placement_rays + f.reconstruction_rays;
                 r.add_rays(rays);
                 res.runs.push(MethodRun {

@@ -2,31 +2,18 @@
 //! the same scene at equal cache count, their records drawn over their fields (the
 //! colours of `figure::draw_records`, one colour range for all), their error maps on
 //! one shared range (`figure::shared_error_range`) and their numbers (records, ε,
-//! rays, time, RMSE, relMSE), as `volcache figure compare` shows them. Also the
-//! textures the record and error overlays of the canvas use, and the compare part of
-//! the side panel's "Methods".
+//! rays, time, RMSE, relMSE), as `volcache figure compare` shows them (textures from
+//! [`super::compare_textures`]). Also the data of the canvas's record and error
+//! overlays, and the compare part of the side panel's "Methods".
 
 use super::compare::{CompareResult, METHODS, compare_command, method_label};
-use super::overlay::{error_image, record_shapes, records_scale};
+use super::compare_textures::CompareTextures;
+use super::overlay::{record_shapes, records_scale};
 use super::view::{ViewState, Xform};
 use super::workbench::Workbench;
-use crate::figure::{FieldStyle, RECORD_BLUE, RecordColor, field_to_rgba, shared_error_range};
+use crate::figure::{RECORD_BLUE, RecordColor};
 use crate::flatland::cached_field::{CacheMethod, RecordInfo};
-use crate::flatland::field::Field;
-use eframe::egui::{self, Color32, DragValue, Rect, RichText, Sense, TextureOptions, pos2, vec2};
-use std::sync::Arc;
-
-/// Textures of one comparison result.
-pub struct CompareTextures {
-    /// The result (by address) and exposure they were made for.
-    key: (usize, u64),
-    /// The reference's field, then each run's.
-    pub fields: Vec<egui::TextureHandle>,
-    /// Each run's error map.
-    pub errors: Vec<egui::TextureHandle>,
-    /// The error maps' shared (log) range.
-    pub error_range: (f64, f64),
-}
+use eframe::egui::{self, Color32, DragValue, Rect, RichText, Sense, pos2, vec2};
 
 /// The record colourings offered.
 pub const RECORD_COLORS: [(RecordColor, &str); 4] = [
@@ -41,12 +28,6 @@ fn color_name(c: RecordColor) -> &'static str {
         .iter()
         .find(|(x, _)| *x == c)
         .map_or("uniform", |(_, n)| n)
-}
-
-fn texture(ctx: &egui::Context, name: &str, f: &Field, style: &FieldStyle) -> egui::TextureHandle {
-    let m = field_to_rgba(f, style);
-    let image = egui::ColorImage::from_rgba_unmultiplied([f.width, f.height], &m.rgba);
-    ctx.load_texture(name, image, TextureOptions::NEAREST)
 }
 
 /// The numbers of a run as shown under its images.
@@ -69,37 +50,11 @@ impl Workbench {
             self.compare_tex = None;
             return;
         };
-        let key = (Arc::as_ptr(&res) as usize, self.display.exposure.to_bits());
-        if self.compare_tex.as_ref().is_some_and(|t| t.key == key) {
+        let exposure = self.display.exposure;
+        if self.compare_tex.as_ref().is_some_and(|t| t.is_for(&res, exposure)) {
             return;
         }
-        let tone = FieldStyle::Tonemapped {
-            exposure: self.display.exposure,
-        };
-        let mut fields = vec![texture(ctx, "compare_ref", &res.reference, &tone)];
-        for r in &res.runs {
-            fields.push(texture(ctx, "compare_field", &r.field, &tone));
-        }
-        let pairs: Vec<(&Field, &Field)> = res.runs.iter().map(|r| (&r.field, &res.reference)).collect();
-        let error_range = if pairs.is_empty() {
-            (1e-3, 1.0)
-        } else {
-            shared_error_range(&pairs, false)
-        };
-        let errors = res
-            .runs
-            .iter()
-            .map(|r| {
-                let image = error_image(&r.field, &res.reference, error_range);
-                ctx.load_texture("compare_error", image, TextureOptions::NEAREST)
-            })
-            .collect();
-        self.compare_tex = Some(CompareTextures {
-            key,
-            fields,
-            errors,
-            error_range,
-        });
+        self.compare_tex = Some(CompareTextures::new(ctx, &res, exposure));
     }
 
     /// The records of every run of the latest comparison (for the shared colour range).

@@ -1,20 +1,22 @@
 //! What the app computes in the background, through the same library calls as the
-//! command line: `render_field` (as `volcache field`), `probe::capture` +
-//! `proxy::build` + `derivatives::{aware, unaware}` (as `volcache probe --method
-//! aware|unaware`, same seed and item), `derivatives::reference`, and a grid of
-//! light fields with the seeds of `volcache figure gradients`.
+//! command line: `render_field` (as `volcache field`), aware and unaware on one
+//! light field ([`aware_and_unaware`], as `volcache probe --method aware|unaware`,
+//! same seed and item), the finite-difference reference in batches
+//! ([`reference_batch`]), and a grid of light fields with the points and seeds of
+//! `volcache figure gradients` ([`grid_points`], [`point_seed`]).
 
 use super::jobs::{Job, Notify, Priority, Reporter};
 use crate::core::color::{Rgb, luminance};
-use crate::core::rng::mix64;
 use crate::core::space::D2;
 use crate::flatland::field::{FieldParams, RenderedField, render_field};
 use crate::flatland::scene::Scene;
 use crate::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
 use crate::pipeline::path::Settings;
-use crate::pipeline::probe::{Outgoing, ProbeSettings, capture};
-use crate::pipeline::proxy;
+use crate::pipeline::probe::{Outgoing, ProbeSettings};
 use crate::pipeline::world::World;
+use crate::study::gradients::grid_points;
+use crate::study::light_field_derivs::{aware_and_unaware, mean_parts, reference_batch};
+use crate::study::seeds::point_seed;
 
 type PartDerivs = derivatives::PartDerivs<D2>;
 type LightField = crate::pipeline::probe::LightField<D2>;
@@ -192,12 +194,11 @@ pub fn spawn_probe(
             r.stage(format!("probe: light field, {} rays", ps.rays));
             r.progress().start(1);
             let start = std::time::Instant::now();
-            let lf = capture(&*scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, r.progress())?;
-            r.add_rays(lf.cost_rays);
             let aw = AwareSettings::default();
-            let elements = proxy::build(&lf, aw.rule);
-            let aware = derivatives::aware(&lf, &elements, &aw);
-            let unaware = derivatives::unaware(&lf);
+            let out = Outgoing::Direction(omega_o);
+            let shared = aware_and_unaware(&*scene, x, out, &ps, &aw, seed, r.progress())?;
+            let lf = shared.light_field;
+            r.add_rays(lf.cost_rays);
             r.progress().advance(1);
             r.send(Arc::new(ProbeResult {
                 at: x,
@@ -205,9 +206,9 @@ pub fn spawn_probe(
                 incoming: incoming(&scene, &lf),
                 rays: lf.cost_rays,
                 light_field: lf,
-                elements,
-                aware,
-                unaware,
+                elements: shared.elements,
+                aware: shared.aware,
+                unaware: shared.unaware,
                 seconds: start.elapsed().as_secs_f64(),
             }));
             Ok(())
@@ -228,18 +229,7 @@ pub struct ReferenceResult {
 
 impl ReferenceResult {
     pub fn mean(&self) -> PartDerivs {
-        let n = self.batches.len().max(1) as f64;
-        let mut m = PartDerivs::default();
-        for b in &self.batches {
-            m.direct += b.direct;
-            m.single += b.single;
-            m.multiple += b.multiple;
-        }
-        PartDerivs {
-            direct: m.direct.scale(1.0 / n),
-            single: m.single.scale(1.0 / n),
-            multiple: m.multiple.scale(1.0 / n),
-        }
+        mean_parts(&self.batches)
     }
 }
 
@@ -279,13 +269,14 @@ pub fn spawn_reference(
             };
             for k in 0..n {
                 r.progress().check()?;
-                let d = derivatives::reference_at(
+                let d = reference_batch(
                     &*scene,
                     x,
                     Outgoing::Direction(omega_o),
                     &rs,
                     &settings,
-                    mix64(seed ^ (k as u64 + 1)),
+                    seed,
+                    k as u64 + 1,
                 );
                 r.add_rays(d.rays);
                 res.rays += d.rays;
@@ -317,20 +308,6 @@ pub struct GradientGrid {
     pub points: Vec<GridPoint>,
 }
 
-/// Cell centres of an n × n grid over the domain, row by row from the bottom (the
-/// order and seeds of `volcache figure gradients --grid n`).
-pub fn grid_points(scene: &Scene, n: usize) -> Vec<DVec2> {
-    let (lo, size) = (scene.domain_min, scene.domain_max - scene.domain_min);
-    (0..n * n)
-        .map(|k| lo + size * DVec2::new((k % n) as f64 + 0.5, (k / n) as f64 + 0.5) / n as f64)
-        .collect()
-}
-
-/// The seed of grid point k (as `figure gradients`).
-pub fn grid_seed(seed: u64, k: usize) -> u64 {
-    mix64(seed ^ mix64(k as u64))
-}
-
 pub fn spawn_gradients(
     scene: Arc<Scene>,
     n: usize,
@@ -358,18 +335,13 @@ pub fn spawn_gradients(
                     unaware: None,
                 };
                 if scene.medium_at(x).is_some() {
-                    let lf = capture(
-                        &*scene,
-                        x,
-                        Outgoing::Direction(omega_o),
-                        &ps,
-                        grid_seed(seed, k),
-                        0,
-                        r.progress(),
-                    )?;
-                    r.add_rays(lf.cost_rays);
-                    p.aware = Some(derivatives::aware(&lf, &proxy::build(&lf, aw.rule), &aw));
-                    p.unaware = Some(derivatives::unaware(&lf));
+                    // The points and seeds of `volcache figure gradients --grid n`.
+                    let out = Outgoing::Direction(omega_o);
+                    let shared =
+                        aware_and_unaware(&*scene, x, out, &ps, &aw, point_seed(seed, k, false), r.progress())?;
+                    r.add_rays(shared.light_field.cost_rays);
+                    p.aware = Some(shared.aware);
+                    p.unaware = Some(shared.unaware);
                 }
                 done.push(p);
                 r.progress().advance(1);

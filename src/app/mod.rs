@@ -18,6 +18,7 @@
 pub mod canvas;
 pub mod command;
 pub mod compare;
+pub mod compare_textures;
 pub mod compare_view;
 pub mod compute;
 pub mod document;

@@ -107,7 +107,7 @@ pub struct Workbench {
     pub record_color: RecordColor,
     pub(super) compare: Slot<CompareKey, Arc<CompareResult>>,
     /// Textures of the compare view and the error overlay, for one result.
-    pub(super) compare_tex: Option<super::compare_view::CompareTextures>,
+    pub(super) compare_tex: Option<super::compare_textures::CompareTextures>,
     pub(super) compare_out: String,
     pub(super) texture: Option<(egui::TextureHandle, (usize, Display))>,
     pub(super) color_scale: Option<ColorScale>,

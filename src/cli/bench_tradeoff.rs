@@ -3,9 +3,8 @@
 //! placement re-run from scratch so its time is honest) and path tracing over
 //! samples per pixel; error against one reference field (cached on disk).
 
-use super::caches::{CacheArgs, MethodArg, MethodRun, field_params, run_method};
+use super::caches::{CacheArgs, field_params, reference, run_method};
 use super::common::{load_scene, scene_stem, wrote};
-use super::reference::{ReferenceInfo, reference_field};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -13,9 +12,11 @@ use std::process::ExitCode;
 use volcache::figure::axis::Axis;
 use volcache::figure::gradient_figure::{AWARE_PURPLE, REFERENCE_BLUE, UNAWARE_ORANGE};
 use volcache::figure::plot::{LineStyle, Plot, Series, draw_plot_into};
-use volcache::flatland::field::{FieldParams, field_errors};
+use volcache::flatland::field::FieldParams;
 use volcache::output::{write_json, write_png};
 use volcache::progress::Progress;
+use volcache::study::field_runs::{FieldMethod, MethodRun};
+use volcache::study::reference2d::ReferenceInfo;
 
 #[derive(Args, Debug)]
 pub struct TradeoffArgs {
@@ -35,7 +36,7 @@ pub struct TradeoffArgs {
 
 #[derive(Serialize)]
 struct Point {
-    method: MethodArg,
+    method: FieldMethod,
     target: Option<usize>,
     spp: Option<u32>,
     #[serde(flatten)]
@@ -56,46 +57,22 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
-    let ref_fp = FieldParams {
-        spp: a.cache.ref_spp,
-        seed: a.cache.seed ^ 0x5EED,
-        ..fp.clone()
-    };
-    let (reference, ref_info) = reference_field(&scene, &ref_fp, &a.cache.ref_cache, a.cache.quiet)?;
+    let (reference, ref_info) = reference(&scene, &fp, &a.cache)?;
     let progress = Progress::new();
     let mut points = Vec::new();
-    for method in [MethodArg::Ours, MethodArg::Jarosz08] {
+    for method in [FieldMethod::Ours, FieldMethod::Jarosz08] {
         for &k in &a.counts {
-            // Find ε for k records, then time a fresh placement at that ε.
-            let found = run_method(
-                &scene,
-                &fp,
-                method,
-                0,
-                &CacheArgs {
-                    caches: Some(k),
-                    ..a.cache.clone()
-                },
-                &progress,
-            )?;
-            let mut run = run_method(
-                &scene,
-                &fp,
-                method,
-                0,
-                &CacheArgs {
-                    caches: None,
-                    eps: found.eps,
-                    ..a.cache.clone()
-                },
-                &progress,
-            )?;
-            run.errors = Some(field_errors(&run.field, &reference));
+            // ε for k records, then a fresh placement at that ε, timed.
+            let target = CacheArgs {
+                caches: Some(k),
+                ..a.cache.clone()
+            };
+            let run = run_method(&scene, &fp, method, 0, &target, &reference, &progress)?;
             eprintln!(
                 "{method:?} {k:>5}: {} records, {:.2} s, RMSE {:.4e}",
                 run.records,
                 run.seconds_total,
-                run.errors.unwrap().rmse
+                run.errors.unwrap_or_default().rmse
             );
             points.push(Point {
                 method,
@@ -106,15 +83,14 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
         }
     }
     for &spp in &a.spps {
-        let mut run = run_method(&scene, &fp, MethodArg::Pt, spp, &a.cache, &progress)?;
-        run.errors = Some(field_errors(&run.field, &reference));
+        let run = run_method(&scene, &fp, FieldMethod::Pt, spp, &a.cache, &reference, &progress)?;
         eprintln!(
             "Pt {spp:>5} spp: {:.2} s, RMSE {:.4e}",
             run.seconds_total,
-            run.errors.unwrap().rmse
+            run.errors.unwrap_or_default().rmse
         );
         points.push(Point {
-            method: MethodArg::Pt,
+            method: FieldMethod::Pt,
             target: None,
             spp: Some(spp),
             run,
@@ -135,7 +111,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn series(points: &[Point], method: MethodArg, x: impl Fn(&Point) -> f64) -> Vec<(f64, f64)> {
+fn series(points: &[Point], method: FieldMethod, x: impl Fn(&Point) -> f64) -> Vec<(f64, f64)> {
     let mut v: Vec<(f64, f64)> = points
         .iter()
         .filter(|p| p.method == method)
@@ -155,17 +131,17 @@ fn tradeoff_plot(stem: &str, points: &[Point]) -> tiny_skia::Pixmap {
         styled(
             "ours (aware, Hessian)",
             AWARE_PURPLE,
-            series(points, MethodArg::Ours, |p| p.run.seconds_total),
+            series(points, FieldMethod::Ours, |p| p.run.seconds_total),
         ),
         styled(
             "Jarosz 2008 (unaware)",
             UNAWARE_ORANGE,
-            series(points, MethodArg::Jarosz08, |p| p.run.seconds_total),
+            series(points, FieldMethod::Jarosz08, |p| p.run.seconds_total),
         ),
         styled(
             "path tracing",
             REFERENCE_BLUE,
-            series(points, MethodArg::Pt, |p| p.run.seconds_total),
+            series(points, FieldMethod::Pt, |p| p.run.seconds_total),
         ),
     ];
     by_time.legend = true;
@@ -175,12 +151,12 @@ fn tradeoff_plot(stem: &str, points: &[Point]) -> tiny_skia::Pixmap {
         styled(
             "ours (aware, Hessian)",
             AWARE_PURPLE,
-            series(points, MethodArg::Ours, |p| p.run.records as f64),
+            series(points, FieldMethod::Ours, |p| p.run.records as f64),
         ),
         styled(
             "Jarosz 2008 (unaware)",
             UNAWARE_ORANGE,
-            series(points, MethodArg::Jarosz08, |p| p.run.records as f64),
+            series(points, FieldMethod::Jarosz08, |p| p.run.records as f64),
         ),
     ];
     by_count.legend = true;

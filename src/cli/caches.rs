@@ -2,28 +2,19 @@
 //! Jarosz et al. 2008) or by path tracing, and measure it against a reference.
 
 use super::common::{ProgressUi, load_scene, parse_res, scene_stem, wrote};
-use super::reference::{ReferenceInfo, reference_field};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use volcache::figure::{FieldStyle, field_figure};
-use volcache::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo, RecordMemo, render_cached};
-use volcache::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
+use volcache::flatland::cached_field::{CacheMethod, CacheSettings};
+use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::scene::Scene;
 use volcache::output::{write_exr, write_json, write_png};
-use volcache::progress::Progress;
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MethodArg {
-    /// Second-order occlusion-aware cache (Hessian ellipses).
-    Ours,
-    /// First-order occlusion-unaware cache (gradient circles).
-    Jarosz08,
-    /// Per-pixel path tracing.
-    Pt,
-}
+use volcache::progress::{Cancelled, Progress};
+use volcache::study::field_runs::{self, FieldMethod, MethodRun, cache_run, pt_run};
+use volcache::study::reference2d::{ReferenceInfo, reference_field};
+use volcache::study::seeds::reference_seed;
 
 /// Cache parameters shared by `caches`, `figure compare` and `bench tradeoff`.
 #[derive(Args, Debug, Clone)]
@@ -66,7 +57,7 @@ pub struct CachesArgs {
     /// Scene JSON (default: the embedded occluder scene).
     pub scene: Option<PathBuf>,
     #[arg(long, value_enum, default_value = "ours")]
-    pub method: MethodArg,
+    pub method: FieldMethod,
     /// Samples per pixel for `--method pt`.
     #[arg(long, default_value_t = 16)]
     pub spp: u32,
@@ -75,24 +66,6 @@ pub struct CachesArgs {
     /// Output directory.
     #[arg(long, default_value = "out/caches")]
     pub out: PathBuf,
-}
-
-/// What one method produced and what it cost.
-#[derive(Clone, Debug, Serialize)]
-pub struct MethodRun {
-    pub method: MethodArg,
-    pub eps: Option<f64>,
-    pub records: usize,
-    #[serde(skip)]
-    pub record_list: Vec<Vec<RecordInfo>>,
-    #[serde(skip)]
-    pub field: Field,
-    pub rays_placement: u64,
-    pub rays_reconstruction: u64,
-    pub seconds_placement: f64,
-    pub seconds_reconstruction: f64,
-    pub seconds_total: f64,
-    pub errors: Option<FieldErrors>,
 }
 
 pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
@@ -105,89 +78,29 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
     fp
 }
 
+/// The options' cache settings (`fp.seed` is `--seed`, see [`field_params`]).
 pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
-    let mut cs = CacheSettings::new::<volcache::core::space::D2>(method, a.eps.unwrap_or(0.05), fp.settings);
-    cs.probe.rays = a.rays.max(3);
-    cs.probe.steps = a.steps.max(1);
+    let mut cs = field_runs::cache_settings(method, a.eps.unwrap_or(0.05), fp, a.rays, a.steps);
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
-    cs.seed = a.seed;
     cs
 }
 
-/// Run one method (a fresh memo: times are honest).
+/// `method` with the options' cache settings and record count (`--caches`: the
+/// equal-count protocol), measured against `reference`.
 pub fn run_method(
     scene: &Scene,
     fp: &FieldParams,
-    method: MethodArg,
+    method: FieldMethod,
     spp: u32,
     a: &CacheArgs,
+    reference: &Field,
     progress: &Progress,
-) -> anyhow::Result<MethodRun> {
-    let cancelled = |_| anyhow::anyhow!("cancelled");
-    Ok(match method {
-        MethodArg::Pt => {
-            let p = FieldParams { spp, ..fp.clone() };
-            let r = render_field(scene, &p, progress).map_err(cancelled)?;
-            MethodRun {
-                method,
-                eps: None,
-                records: 0,
-                record_list: vec![],
-                field: r.field,
-                rays_placement: 0,
-                rays_reconstruction: r.rays,
-                seconds_placement: 0.0,
-                seconds_reconstruction: r.seconds,
-                seconds_total: r.seconds,
-                errors: None,
-            }
-        }
-        MethodArg::Ours | MethodArg::Jarosz08 => {
-            let m = if method == MethodArg::Ours {
-                CacheMethod::Ours
-            } else {
-                CacheMethod::Jarosz08
-            };
-            let cs = cache_settings(m, a, fp);
-            let mut memo = RecordMemo::new();
-            let eps = match a.caches {
-                Some(k) => {
-                    render_cached(scene, fp, &cs, Some(k.max(1)), &mut memo, progress)
-                        .map_err(cancelled)?
-                        .eps
-                }
-                None => cs.eps,
-            };
-            // Time a fresh placement at the chosen ε (the search's memo would hide its cost).
-            let start = std::time::Instant::now();
-            let f = render_cached(
-                scene,
-                fp,
-                &CacheSettings { eps, ..cs },
-                None,
-                &mut RecordMemo::new(),
-                progress,
-            )
-            .map_err(cancelled)?;
-            let seconds_total = start.elapsed().as_secs_f64();
-            MethodRun {
-                method,
-                eps: Some(eps),
-                records: f.record_count(),
-                record_list: f.records.clone(),
-                rays_placement: f.placement_rays,
-                rays_reconstruction: f.reconstruction_rays,
-                seconds_placement: f.placement_seconds,
-                seconds_reconstruction: f.reconstruction_seconds,
-                // With --caches, the cost of the placement at the found ε (the search's
-                // earlier placements are not counted).
-                seconds_total,
-                field: f.field,
-                errors: None,
-            }
-        }
-    })
+) -> Result<MethodRun, Cancelled> {
+    match method.cache_method() {
+        Some(m) => cache_run(scene, fp, &cache_settings(m, a, fp), a.caches, reference, progress),
+        None => pt_run(scene, fp, spp, reference, progress),
+    }
 }
 
 #[derive(Serialize)]
@@ -201,27 +114,29 @@ struct Summary<'a> {
     reference: &'a ReferenceInfo,
 }
 
+/// The reference field of the options (`--ref-spp`, the reference's own seed),
+/// from the store in `--ref-cache` or rendered (with a progress bar) into it.
+pub fn reference(scene: &Scene, fp: &FieldParams, a: &CacheArgs) -> anyhow::Result<(Field, ReferenceInfo)> {
+    let ref_fp = FieldParams {
+        spp: a.ref_spp,
+        seed: reference_seed(a.seed),
+        ..fp.clone()
+    };
+    reference_field(scene, &ref_fp, &a.ref_cache, |label| ProgressUi::new(label, !a.quiet))
+}
+
 pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
-    let ref_fp = FieldParams {
-        spp: a.cache.ref_spp,
-        seed: a.cache.seed ^ 0x5EED,
-        ..fp.clone()
-    };
-    let (reference, ref_info) = reference_field(&scene, &ref_fp, &a.cache.ref_cache, a.cache.quiet)?;
+    let (reference, ref_info) = reference(&scene, &fp, &a.cache)?;
     let ui = ProgressUi::new(&format!("{stem} {:?}", a.method), !a.cache.quiet);
-    let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &ui.progress);
+    let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &reference, &ui.progress);
     ui.finish();
-    let mut run = match run {
-        Ok(r) => r,
-        Err(_) => {
-            eprintln!("cancelled: no output written");
-            return Ok(ExitCode::from(130));
-        }
+    let Ok(run) = run else {
+        eprintln!("cancelled: no output written");
+        return Ok(ExitCode::from(130));
     };
-    run.errors = Some(field_errors(&run.field, &reference));
     write_outputs(&a.out, &scene, &run, &reference)?;
     let e = run.errors.unwrap_or_default();
     eprintln!(

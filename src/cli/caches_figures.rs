@@ -1,19 +1,13 @@
 //! The figures `volcache caches` writes beside the field: the record distribution
 //! and the error map against the reference.
 
-use super::caches::MethodRun;
 use super::common::wrote;
 use std::path::Path;
 use volcache::figure::{RecordColor, RecordStyle, error_map_figure, records_figure};
-use volcache::flatland::cached_field::RecordInfo;
 use volcache::flatland::field::Field;
 use volcache::flatland::scene::Scene;
 use volcache::output::write_png;
-
-/// All records of a run (one list, whatever the number of caches).
-pub fn all_records(run: &MethodRun) -> Vec<RecordInfo> {
-    run.record_list.iter().flatten().cloned().collect()
-}
+use volcache::study::field_runs::MethodRun;
 
 pub fn write_cache_figures(dir: &Path, scene: &Scene, run: &MethodRun, reference: &Field) -> anyhow::Result<()> {
     let rmse = run.errors.map_or(f64::NAN, |e| e.rmse);
@@ -34,7 +28,7 @@ pub fn write_cache_figures(dir: &Path, scene: &Scene, run: &MethodRun, reference
             &png,
             write_png(
                 &png,
-                &records_figure(Some(&run.field), scene, &all_records(run), &style, Some(&title)),
+                &records_figure(Some(&run.field), scene, &run.all_records(), &style, Some(&title)),
             ),
         )?;
     }

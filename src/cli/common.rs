@@ -110,6 +110,14 @@ impl ProgressUi {
     }
 }
 
+/// What the library's long computations report to (they make it only when there
+/// is work, and drop it when done).
+impl AsRef<Progress> for ProgressUi {
+    fn as_ref(&self) -> &Progress {
+        &self.progress
+    }
+}
+
 impl Drop for ProgressUi {
     fn drop(&mut self) {
         self.shutdown();

@@ -2,10 +2,8 @@
 //! reference, ours and Jarosz 2008 side by side with their cache distributions,
 //! error maps (shared range) and the numbers in the captions.
 
-use super::caches::{CacheArgs, MethodArg, MethodRun, field_params, run_method};
-use super::caches_figures::all_records;
+use super::caches::{CacheArgs, field_params, reference, run_method};
 use super::common::{ProgressUi, load_scene, scene_stem, wrote};
-use super::reference::reference_field;
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -14,8 +12,10 @@ use volcache::figure::{
     FieldStyle, RecordColor, RecordStyle, compose_grid, error_map_figure, field_figure, record_color_scale,
     records_figure, shared_error_range,
 };
-use volcache::flatland::field::{FieldParams, field_errors};
+use volcache::flatland::field::FieldParams;
 use volcache::output::{write_json, write_png};
+use volcache::study::field_runs::{FieldMethod, MethodRun};
+use volcache::study::reference2d::ReferenceInfo;
 
 #[derive(Args, Debug)]
 pub struct CompareArgs {
@@ -32,7 +32,7 @@ struct Report<'a> {
     scene: &'a str,
     params: &'a FieldParams,
     target_records: Option<usize>,
-    reference: &'a super::reference::ReferenceInfo,
+    reference: &'a ReferenceInfo,
     runs: &'a [MethodRun],
 }
 
@@ -57,22 +57,16 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
         cache.caches = Some(200);
     }
     let fp = field_params(&scene, &cache);
-    let ref_fp = FieldParams {
-        spp: cache.ref_spp,
-        seed: cache.seed ^ 0x5EED,
-        ..fp.clone()
-    };
-    let (reference, ref_info) = reference_field(&scene, &ref_fp, &cache.ref_cache, cache.quiet)?;
+    let (reference, ref_info) = reference(&scene, &fp, &cache)?;
     let mut runs = Vec::new();
-    for method in [MethodArg::Ours, MethodArg::Jarosz08] {
+    for method in [FieldMethod::Ours, FieldMethod::Jarosz08] {
         let ui = ProgressUi::new(&format!("{stem} {method:?}"), !cache.quiet);
-        let r = run_method(&scene, &fp, method, 0, &cache, &ui.progress);
+        let r = run_method(&scene, &fp, method, 0, &cache, &reference, &ui.progress);
         ui.finish();
-        let Ok(mut r) = r else {
+        let Ok(r) = r else {
             eprintln!("cancelled: no output written");
             return Ok(ExitCode::from(130));
         };
-        r.errors = Some(field_errors(&r.field, &reference));
         runs.push(r);
     }
     let tone = FieldStyle::Tonemapped {
@@ -80,7 +74,7 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
     };
     let range = shared_error_range(&[(&runs[0].field, &reference), (&runs[1].field, &reference)], false);
     // One colour range for both distributions, so radii compare across methods.
-    let both: Vec<_> = runs.iter().flat_map(all_records).collect();
+    let both: Vec<_> = runs.iter().flat_map(MethodRun::all_records).collect();
     let mut style = RecordStyle::colored(RecordColor::ByRadius);
     style.range = record_color_scale(&both, &style).map(|s| (s.min, s.max));
     let ref_caption = format!(
@@ -107,7 +101,7 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
         ));
         row_records.push((
             Some(format!("{name}: records")),
-            records_figure(None, &scene, &all_records(r), &style, None),
+            records_figure(None, &scene, &r.all_records(), &style, None),
             None,
         ));
         row_errors.push((

@@ -5,9 +5,9 @@
 //! its medium part) in the captions and a JSON report.
 
 use super::common::{ProgressUi, wrote};
-use super::image3d::{as_field, parse_crop};
+use super::image3d::parse_crop;
 use super::render3d_cache::Cache3dArgs;
-use super::runs3d::{ReferenceInfo3d, Run3d, Setup3d, Setup3dArgs, pt_seed, run_cache, run_pt, setup3d};
+use super::setup3d::{Setup3d, Setup3dArgs, run_cache, setup3d};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -19,7 +19,10 @@ use volcache::figure::image3d::{
     records_panel,
 };
 use volcache::figure::{Cell, compose_grid, shared_error_range, upscale_factor};
-use volcache::output::{write_exr, write_json, write_png};
+use volcache::output::{image_field, write_exr, write_json, write_png};
+use volcache::study::reference3d::ReferenceInfo3d;
+use volcache::study::runs3d::{Run3d, pt_run};
+use volcache::study::seeds::pt_seed;
 use volcache::volume::cached::RecordMemo;
 use volcache::volume::render::{RenderParams, camera};
 
@@ -64,33 +67,24 @@ fn caption(r: &Run3d) -> String {
 }
 
 pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
-    let Setup3d {
-        scene,
-        stem,
-        image,
-        reference,
-        ref_info,
-    } = setup3d(&a.setup, a.quiet)?;
+    let setup = setup3d(&a.setup, a.quiet)?;
     let mut cache = a.cache.clone();
     if cache.caches.is_none() && cache.eps.is_none() {
         cache.caches = Some(200);
     }
     let mut runs = Vec::new();
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
-        let ui = ProgressUi::new(&format!("{stem} {method:?}"), !a.quiet);
-        let r = run_cache(
-            &scene,
-            &image,
-            method,
-            &cache,
-            cache.caches,
-            &mut RecordMemo::new(),
-            &reference,
-            &ui.progress,
-        );
-        ui.finish();
-        runs.push(r?);
+        let label = format!("{} {method:?}", setup.stem);
+        let memo = &mut RecordMemo::new();
+        runs.push(run_cache(&setup, method, &cache, cache.caches, memo, &label, a.quiet)?);
     }
+    let Setup3d {
+        scene,
+        stem,
+        image,
+        reference,
+        ref_info,
+    } = setup;
     // Path tracing in the time ours took (its own seed: not the caches' camera rays).
     let pt_params = RenderParams {
         spp: 1 << 24,
@@ -99,7 +93,7 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
         ..image.clone()
     };
     let ui = ProgressUi::new(&format!("{stem} pt (equal time)"), !a.quiet);
-    let pt = run_pt(&scene, &pt_params, &reference, &ui.progress);
+    let pt = pt_run(&scene, &pt_params, &reference, &ui.progress);
     ui.finish();
     runs.push(pt?);
     for r in &runs {
@@ -186,7 +180,7 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
     let ref_img = img(w, h, &reference.values);
     let pairs: Vec<_> = runs
         .iter()
-        .map(|r| (as_field(w, h, &r.image.values), as_field(w, h, &reference.values)))
+        .map(|r| (image_field(w, h, &r.image.values), image_field(w, h, &reference.values)))
         .collect();
     let range = shared_error_range(&pairs.iter().map(|(t, r)| (t, r)).collect::<Vec<_>>(), false);
     let row_errors: Vec<Cell> = runs
@@ -209,7 +203,7 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
     wrote(&png, write_png(&png, &pix))?;
     for r in &runs {
         let exr = a.out.join(format!("{stem}_{}.exr", r.method));
-        wrote(&exr, write_exr(&exr, &as_field(w, h, &r.image.values)))?;
+        wrote(&exr, write_exr(&exr, &image_field(w, h, &r.image.values)))?;
     }
     let report = Report {
         scene: &scene.source,

@@ -2,7 +2,6 @@
 //! [`volcache::figure::gradient_figure`]) and the profiles along the line, each with a
 //! word-wrapped footer saying how the numbers were made.
 
-use super::figure::{METHODS, PointOut};
 use glam::DVec2;
 use tiny_skia::{Color, Pixmap, PixmapPaint, Transform};
 use volcache::figure::{
@@ -10,6 +9,7 @@ use volcache::figure::{
     UNAWARE_ORANGE, VAlign, View, draw_plots_stacked, draw_text_aligned, gradient_figure, text_width,
 };
 use volcache::flatland::scene::Scene;
+use volcache::study::gradients::{METHODS, PointOut};
 
 /// A figure's title and footer lines (each wrapped to the figure's width).
 pub struct FigureText {

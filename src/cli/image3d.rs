@@ -8,10 +8,9 @@ use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use volcache::core::color::{Rgb, luminance};
-use volcache::core::stats::ImageErrors;
+use volcache::core::stats::{ImageErrors, luminance_errors};
 use volcache::figure::tonemap;
-use volcache::flatland::field::Field;
-use volcache::output::{read_exr, write_exr, write_json, write_png};
+use volcache::output::{image_field, read_exr, write_exr, write_json, write_png};
 use volcache::volume::cached::CacheSettings;
 use volcache::volume::render::{RenderParams, Rendered};
 
@@ -146,13 +145,6 @@ pub fn set_window(
     })
 }
 
-/// The image as a field (the EXR writer's type); its world rectangle is unused.
-pub fn as_field(width: usize, height: usize, values: &[Rgb]) -> Field {
-    let mut f = Field::new(width, height, glam::DVec2::ZERO, glam::DVec2::ONE);
-    f.values.copy_from_slice(values);
-    f
-}
-
 pub fn tonemapped(width: usize, height: usize, values: &[Rgb], exposure: f64) -> anyhow::Result<tiny_skia::Pixmap> {
     let mut pm = tiny_skia::Pixmap::new(width as u32, height as u32)
         .ok_or_else(|| anyhow::anyhow!("cannot make a {width}x{height} image"))?;
@@ -177,16 +169,6 @@ pub fn read_image(path: &Path, width: usize, height: usize) -> anyhow::Result<Ve
         .collect())
 }
 
-/// Luminance errors of `values` against `reference`.
-pub fn errors(values: &[Rgb], reference: &[Rgb]) -> ImageErrors {
-    let pairs: Vec<(f64, f64)> = values
-        .iter()
-        .zip(reference)
-        .map(|(a, b)| (luminance(*a), luminance(*b)))
-        .collect();
-    ImageErrors::of_luminance_pairs(&pairs)
-}
-
 /// The medium-part EXR beside an image EXR: `x.exr` → `x_medium.exr`.
 pub fn medium_path(exr: &Path) -> PathBuf {
     let stem = exr
@@ -200,13 +182,16 @@ pub fn reference_errors(img: &Rendered, reference: &Path) -> anyhow::Result<Refe
     let total = read_image(reference, img.width, img.height).context("--reference")?;
     let med_path = medium_path(reference);
     let medium = if med_path.exists() {
-        Some(errors(&img.medium, &read_image(&med_path, img.width, img.height)?))
+        Some(luminance_errors(
+            &img.medium,
+            &read_image(&med_path, img.width, img.height)?,
+        ))
     } else {
         None
     };
     Ok(ReferenceErrors {
         reference: reference.display().to_string(),
-        total: errors(&img.values, &total),
+        total: luminance_errors(&img.values, &total),
         medium,
     })
 }
@@ -223,8 +208,8 @@ pub fn write_outputs(base: &Path, img: &Rendered, exposure: f64, summary: &mut S
             .map_or(String::new(), |n| n.to_string_lossy().into_owned())
     };
     (summary.exr, summary.medium_exr, summary.png) = (name(&exr), name(&med), name(&png));
-    wrote(&exr, write_exr(&exr, &as_field(img.width, img.height, &img.values)))?;
-    wrote(&med, write_exr(&med, &as_field(img.width, img.height, &img.medium)))?;
+    wrote(&exr, write_exr(&exr, &image_field(img.width, img.height, &img.values)))?;
+    wrote(&med, write_exr(&med, &image_field(img.width, img.height, &img.medium)))?;
     wrote(
         &png,
         write_png(&png, &tonemapped(img.width, img.height, &img.values, exposure)?),

@@ -13,14 +13,15 @@ mod figure;
 mod figure_compare;
 mod figure_compare3d;
 mod figure_draw;
+mod figure_gradients;
 mod image3d;
 mod merge3d;
 mod probe;
+mod probe_args;
 mod probe_derivs;
-mod reference;
 mod render3d;
 mod render3d_cache;
-mod runs3d;
+mod setup3d;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -47,7 +48,7 @@ enum Command {
     /// Render a scene's radiance field (L_s or fluence) to PNG, and optionally EXR and JSON.
     Field(field::FieldArgs),
     /// Estimate L_s (or fluence) and its parts at points, printed as a table or JSON.
-    Probe(probe::ProbeArgs),
+    Probe(probe_args::ProbeArgs),
     /// Reconstruct the field from a radiance cache (ours, jarosz08) or path tracing (pt), with
     /// the cache distribution, the error map against a reference and the costs.
     Caches(caches::CachesArgs),

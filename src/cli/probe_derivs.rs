@@ -2,7 +2,7 @@
 //! (and the Hessian's eigen-decomposition) per part.
 
 use super::common::load_scene;
-use super::probe::{Method, ProbeArgs};
+use super::probe_args::{Method, ProbeArgs};
 use glam::DVec2;
 use serde::Serialize;
 use std::process::ExitCode;
@@ -10,12 +10,13 @@ use volcache::core::space::{D2, Space};
 use volcache::core::taylor::Taylor2;
 use volcache::core::taylor_rgb::TaylorRgb;
 use volcache::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
-type PartDerivs = volcache::pipeline::derivatives::PartDerivs<volcache::core::space::D2>;
-type Derivatives = volcache::pipeline::derivatives::Derivatives<volcache::core::space::D2>;
 use volcache::pipeline::path::Settings;
-use volcache::pipeline::probe::{Outgoing, ProbeSettings, capture};
-use volcache::pipeline::proxy;
+use volcache::pipeline::probe::{Outgoing, ProbeSettings};
 use volcache::progress::Progress;
+use volcache::study::light_field_derivs::derivatives_at;
+
+type PartDerivs = volcache::pipeline::derivatives::PartDerivs<D2>;
+type Derivatives = volcache::pipeline::derivatives::Derivatives<D2>;
 
 #[derive(Serialize)]
 pub struct TaylorOut {
@@ -70,46 +71,6 @@ pub struct DerivOut {
     pub seconds: f64,
 }
 
-/// Run one derivative method at a point.
-#[allow(clippy::too_many_arguments)] // each setting block is its own type
-pub fn compute(
-    scene: &volcache::flatland::scene::Scene,
-    x: DVec2,
-    omega_o: DVec2,
-    method: Method,
-    ps: &ProbeSettings,
-    rs: &ReferenceSettings,
-    aw: &AwareSettings,
-    seed: u64,
-) -> anyhow::Result<Derivatives> {
-    Ok(match method {
-        Method::Reference => derivatives::reference_at(scene, x, Outgoing::Direction(omega_o), rs, &ps.settings, seed),
-        Method::Aware | Method::Unaware => {
-            let start = std::time::Instant::now();
-            let lf = capture(scene, x, Outgoing::Direction(omega_o), ps, seed, 0, &Progress::new())
-                .map_err(|_| anyhow::anyhow!("cancelled"))?;
-            let (parts, aware) = if method == Method::Aware {
-                (derivatives::aware(&lf, &proxy::build(&lf, aw.rule), aw), true)
-            } else {
-                (derivatives::unaware(&lf), false)
-            };
-            Derivatives {
-                method: if aware {
-                    derivatives::Method::Aware
-                } else {
-                    derivatives::Method::Unaware
-                },
-                at: x,
-                parts,
-                has_hessian: aware,
-                rays: lf.cost_rays,
-                seconds: start.elapsed().as_secs_f64(),
-            }
-        }
-        Method::Pt => unreachable!("pt has no derivatives"),
-    })
-}
-
 pub fn run(a: &ProbeArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let r = &scene.desc.render;
@@ -133,13 +94,21 @@ pub fn run(a: &ProbeArgs) -> anyhow::Result<ExitCode> {
         spp: a.spp.unwrap_or(ReferenceSettings::default().spp),
         relative_step: a.fd_step,
     };
+    let aw = AwareSettings {
+        medium_clamp: a.medium_clamp,
+        rule: a.rule,
+    };
+    let method = match a.method {
+        Method::Aware => derivatives::Method::Aware,
+        Method::Unaware => derivatives::Method::Unaware,
+        Method::Reference => derivatives::Method::Reference,
+        Method::Pt => unreachable!("`probe` runs pt itself"),
+    };
+    let out = Outgoing::Direction(omega_o);
     let mut outs = Vec::new();
     for &x in &a.at {
-        let aw = AwareSettings {
-            medium_clamp: a.medium_clamp,
-            rule: a.rule,
-        };
-        let d = compute(&scene, x, omega_o, a.method, &ps, &rs, &aw, seed)?;
+        // A handle of its own: nothing cancels a probe (it takes a second).
+        let d = derivatives_at(&scene, x, out, method, &ps, &rs, &aw, seed, &Progress::new())?;
         outs.push(to_out(&d, a.method));
     }
     if a.json {

@@ -15,6 +15,7 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use volcache::core::metric::CacheMethod;
 use volcache::volume::records_file::scene_hash;
 use volcache::volume::render::{RenderParams, Rendered, ray_cast_rate, render};
 use volcache::volume::scene::Scene;
@@ -36,6 +37,15 @@ impl Method {
             Method::Pt => "pt",
             Method::Ours => "ours",
             Method::Jarosz08 => "jarosz08",
+        }
+    }
+
+    /// The cache method, None for path tracing.
+    fn cache_method(self) -> Option<CacheMethod> {
+        match self {
+            Method::Pt => None,
+            Method::Ours => Some(CacheMethod::Ours),
+            Method::Jarosz08 => Some(CacheMethod::Jarosz08),
         }
     }
 }
@@ -157,13 +167,11 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
     let [x0, y0, x1, y1] = params.window();
     let label = format!("{stem} {}x{} {}", x1 - x0, y1 - y0, a.method.name());
     let ui = ProgressUi::new(&label, !a.quiet);
-    let result: Result<(Option<Rendered>, Option<CacheSummary>), anyhow::Error> = match a.method {
-        Method::Pt => render(&scene, &params, &ui.progress)
+    let result: Result<(Option<Rendered>, Option<CacheSummary>), anyhow::Error> = match a.method.cache_method() {
+        None => render(&scene, &params, &ui.progress)
             .map(|img| (Some(img), None))
             .map_err(anyhow::Error::from),
-        Method::Ours | Method::Jarosz08 => {
-            run_cached(&scene, &params, a.method, &a.cache, &a.records, &ui.progress).map(|(img, c)| (img, Some(c)))
-        }
+        Some(m) => run_cached(&scene, &params, m, &a.cache, &a.records, &ui.progress).map(|(img, c)| (img, Some(c))),
     };
     ui.finish();
     let (img, cache) = match result {

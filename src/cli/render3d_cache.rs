@@ -3,7 +3,6 @@
 
 use super::common::wrote;
 use super::image3d::CacheSummary;
-use super::render3d::Method;
 use clap::Args;
 use std::path::PathBuf;
 use volcache::core::metric::CacheMethod;
@@ -106,23 +105,15 @@ impl Cache3dArgs {
     }
 }
 
-pub fn cache_method(m: Method) -> CacheMethod {
-    match m {
-        Method::Ours => CacheMethod::Ours,
-        _ => CacheMethod::Jarosz08,
-    }
-}
-
 /// Place (or load) and reconstruct. Returns no image with `--place-only`.
 pub fn run_cached(
     scene: &Scene,
     image: &RenderParams,
-    method: Method,
+    method: CacheMethod,
     a: &Cache3dArgs,
     records: &RecordsArgs,
     progress: &Progress,
 ) -> anyhow::Result<(Option<Rendered>, CacheSummary)> {
-    let method = cache_method(method);
     let (cs, cp) = a.settings(scene, image, method)?;
     let placement = match &records.records_in {
         Some(path) => {

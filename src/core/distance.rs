@@ -11,13 +11,23 @@
 //! 1/ε²), the Hessians stay exact second derivatives of the softened functions, and
 //! for |d| ≫ ε the relative change is ε²/(2|d|²). ε = 0 gives the exact formulas;
 //! it is raised to [`MIN_DISTANCE`] so that 1/r³ can never overflow. Callers pass a
-//! small fraction of the element's size (see `element::near_distance`).
+//! small fraction of the element's size ([`near_distance`]; the segment and
+//! triangle form factors clamp their vertex and edge distances to it).
 
 use super::space::Space;
 use super::taylor::Taylor2;
 
 /// Absolute floor of every softening or clamping length: 1/r³ stays below 1e240.
 pub const MIN_DISTANCE: f64 = 1e-80;
+
+/// Fraction of an element's size below which vertex/edge distances are clamped.
+pub const NEAR_FRACTION: f64 = 1e-2;
+
+/// The clamping distance for an element of the given size (and the softening length
+/// to pass to the phase and transmittance factors of a surface element).
+pub fn near_distance(size: f64) -> f64 {
+    (NEAR_FRACTION * size.abs()).max(MIN_DISTANCE)
+}
 
 /// d = c − x, softened distance r and u = d / r. The one place these are computed.
 #[derive(Clone, Copy, Debug)]

@@ -35,21 +35,13 @@
 //! over a ball of the same measure. Smooth everywhere, with zero gradient at the centre
 //! as symmetry demands, and a relative change ε²/r² ≪ 1 for pieces far from x.
 
+pub use super::distance::{NEAR_FRACTION, near_distance};
 pub use super::triangle::triangle_form_factor;
 
 use super::distance::{MIN_DISTANCE, Offset, distance_from};
 use super::space::{D2, Space};
 use super::taylor::Taylor2;
 use glam::{DMat2, DVec2};
-
-/// Fraction of an element's size below which vertex/edge distances are clamped.
-pub const NEAR_FRACTION: f64 = 1e-2;
-
-/// The clamping distance for an element of the given size (and the softening length
-/// to pass to the phase and transmittance factors of a surface element).
-pub fn near_distance(size: f64) -> f64 {
-    (NEAR_FRACTION * size.abs()).max(MIN_DISTANCE)
-}
 
 /// Gradient and Hessian in x of θ(x) = angle of d = p − x, with |d| clamped to at
 /// least `r_min`: ∇θ = (d_y, −d_x)/|d|², H = [[2d_xd_y, d_y²−d_x²], [·, −2d_xd_y]]/|d|⁴.

@@ -75,6 +75,17 @@ impl ImageErrors {
     }
 }
 
+/// Luminance errors of an image against a reference of the same size.
+pub fn luminance_errors(values: &[crate::core::color::Rgb], reference: &[crate::core::color::Rgb]) -> ImageErrors {
+    use crate::core::color::luminance;
+    let pairs: Vec<(f64, f64)> = values
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| (luminance(*a), luminance(*b)))
+        .collect();
+    ImageErrors::of_luminance_pairs(&pairs)
+}
+
 /// The time a method needs to reach error `e`, from its (time, error) runs: on the
 /// Pareto front (runs no faster run beats), interpolated log-log between the last
 /// run above `e` and the first at or below it. None when no run reaches `e`, or

@@ -19,7 +19,7 @@
 //! Near an edge (theory.md §7): each edge term is evaluated with x moved to at least
 //! `near_distance(longest edge)` from that edge segment (see `element` module docs).
 
-use super::element::near_distance;
+use super::distance::near_distance;
 use super::space::{D3, Space};
 use super::taylor::Taylor2;
 use glam::{DMat3, DVec3};

@@ -32,6 +32,7 @@ pub mod image3d;
 pub mod overlay;
 pub mod panel;
 pub mod plot;
+mod plot_layout;
 mod plot_series;
 pub mod records;
 #[cfg(test)]

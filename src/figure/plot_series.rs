@@ -8,7 +8,7 @@
 //! right, top left, bottom right, bottom left on ties), on a translucent white box.
 
 use super::panel::{Canvas, View};
-use super::plot::{LineStyle, Plot, PlotLayout, Series, TEXT, WHITE, fill_rect};
+use super::plot_layout::{LineStyle, Plot, PlotLayout, Series, TEXT, WHITE, fill_rect};
 use super::text::{HAlign, VAlign, draw_text_aligned, text_width};
 use glam::DVec2;
 use tiny_skia::Pixmap;

@@ -11,4 +11,5 @@ pub mod lights;
 pub mod medium;
 pub mod scene;
 pub mod scene_desc;
+mod scene_world;
 pub mod validate;

@@ -5,15 +5,12 @@
 //! the JSON path of the field and the problem. The default scene is embedded.
 
 use super::geometry::{Segment, SegmentSet};
-use super::lights::{self, Lobe};
 use super::medium::{Medium, Region};
 use super::scene_desc::{LightDesc, RegionDesc, SceneDesc};
 use super::validate::validate;
 use crate::core::color::Rgb;
-use crate::core::rng::Sampler;
 use crate::core::space::D2;
 use crate::pipeline::emitters::Emitters;
-use crate::pipeline::world::{DirectLight, Hit, SurfacePoint, World};
 use crate::scene_check;
 use glam::DVec2;
 use std::path::Path;
@@ -146,61 +143,6 @@ impl Scene {
             medium,
             t_min: 1e-10 * scale.max(1e-300),
         }
-    }
-}
-
-impl World for Scene {
-    type S = D2;
-    type Region = Region;
-
-    /// Diagonal of the domain.
-    fn scale(&self) -> f64 {
-        (self.domain_max - self.domain_min).length()
-    }
-
-    fn closest_hit(&self, o: DVec2, d: DVec2, t_max: f64, skip: Option<u32>) -> Option<Hit> {
-        let (t, prim, u, v) = self.geometry.closest_hit(o, d, self.t_min, t_max, skip)?;
-        Some(Hit { t, prim, u, v })
-    }
-
-    fn occluded(&self, o: DVec2, d: DVec2, t_max: f64, skip: Option<u32>) -> bool {
-        self.geometry.occluded(o, d, self.t_min, t_max * (1.0 - 1e-10), skip)
-    }
-
-    fn centre(&self) -> DVec2 {
-        0.5 * (self.domain_min + self.domain_max)
-    }
-
-    fn medium(&self) -> Option<&Medium> {
-        self.medium.as_ref()
-    }
-
-    fn surface(&self, hit: &Hit, dir: DVec2) -> SurfacePoint<D2> {
-        let seg = &self.geometry.prims[hit.prim as usize];
-        let (normal, active) = seg.facing_dir(dir);
-        SurfacePoint {
-            point: seg.point_at(hit.u),
-            normal,
-            active,
-            emission: seg.emission,
-            reflectance: seg.reflectance,
-        }
-    }
-
-    fn delta_lights(&self, p: DVec2, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-        lights::direct_lights(self, p, lobe, skip, rays)
-    }
-
-    fn sampled_nee(&self, p: DVec2, lobe: &Lobe, skip: Option<u32>, mis: bool, s: &mut Sampler, rays: &mut u64) -> Rgb {
-        lights::emitter_nee(self, p, lobe, skip, mis, s, rays)
-    }
-
-    fn emitter_pdf(&self, from: DVec2, prim: u32, _y: DVec2) -> f64 {
-        lights::emitter_pdf(self, from, prim)
-    }
-
-    fn direct_lights(&self, x: DVec2) -> (Vec<DirectLight<D2>>, u64) {
-        lights::gather_direct(self, x)
     }
 }
 

@@ -14,10 +14,11 @@
 //! also decides the records' methods and values) are the window's camera samples'
 //! march points ([`super::camera_march`]), pixel by pixel in a coarse-to-fine order.
 
+pub use super::cached_params::{CachedRenderParams, Placement, RadianceCache, RecordInfo, RecordMemo};
 use super::camera::Camera;
 use super::camera_march::CameraRay;
 pub use super::reconstruct::{Reconstruction, march_reference, reconstruct};
-use super::render::{RenderParams, camera};
+use super::render::camera;
 use super::scene::Scene;
 use crate::core::cache::placement_order;
 use crate::core::metric::CacheMethod;
@@ -28,14 +29,8 @@ use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::Cached;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
-use serde::Serialize;
 
 pub use crate::pipeline::record::CacheSettings;
-
-pub type RecordMemo = crate::pipeline::placement::RecordMemo<D3>;
-pub type RadianceCache = crate::pipeline::placement::RadianceCache<D3>;
-pub type Placement = crate::pipeline::placement::Placement<D3>;
-pub type RecordInfo = crate::pipeline::record::RecordInfo<D3>;
 
 /// A starting ε for a scene: ours' ε is a volume (scaled with the scene), the
 /// baseline's a fraction.
@@ -43,29 +38,6 @@ pub fn default_eps(method: CacheMethod, scene: &Scene) -> f64 {
     match method {
         CacheMethod::Ours => 1e-4 * scene.scale.powi(3),
         CacheMethod::Jarosz08 => 0.1,
-    }
-}
-
-/// The image a cached render covers and how camera rays are marched.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CachedRenderParams {
-    /// Size, window, camera samples per pixel, seed, path settings (no time budget).
-    pub image: RenderParams,
-    /// Distance Δ between march points along camera rays (scene units).
-    pub march_step: f64,
-    /// Reflected-light samples (NEE + a path each) per camera sample at the first
-    /// surface: surfaces are path traced as in the reference, at a cost far below
-    /// a record's, so they need not be the noise floor of a cached image.
-    pub surface_paths: u32,
-}
-
-impl CachedRenderParams {
-    pub fn from_scene(scene: &Scene) -> Self {
-        CachedRenderParams {
-            image: RenderParams::from_scene(scene),
-            march_step: scene.scale / 128.0,
-            surface_paths: 4,
-        }
     }
 }
 

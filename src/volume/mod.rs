@@ -9,6 +9,7 @@
 //! cached (pipeline placement; reconstruction) → records_file (shared by tiles).
 
 pub mod cached;
+pub mod cached_params;
 pub mod camera;
 pub mod camera_march;
 pub mod lights;
@@ -19,4 +20,5 @@ pub mod records_file;
 pub mod render;
 pub mod scene;
 pub mod scene_desc;
+mod scene_world;
 pub mod validate;

@@ -6,7 +6,7 @@
 //! the direct part sampled at the point) or is path traced. Sharing the camera rays,
 //! march points and surface samples, the two differ only by the cache's error.
 
-use super::cached::{CachedRenderParams, RadianceCache};
+use super::cached_params::{CachedRenderParams, RadianceCache};
 use super::camera_march::CameraRay;
 use super::lights::Lobe;
 use super::render::{Rendered, camera};

@@ -5,17 +5,14 @@
 //! an error naming the file, the JSON path and the problem, never a panic.
 
 use super::camera::Camera;
-use super::lights::{self, Lobe};
 use super::medium::{Medium, Region};
-use super::mesh::{self, Hit, Triangle};
+use super::mesh::{self, Triangle};
 use super::scene_desc::{LightDesc, RegionDesc, SceneDesc};
 use super::validate::{Problem, validate};
 use crate::core::color::Rgb;
-use crate::core::rng::Sampler;
 use crate::core::space::D3;
 use crate::pipeline::bvh::{Aabb, Geometry};
 use crate::pipeline::emitters::Emitters;
-use crate::pipeline::world::{DirectLight, SurfacePoint, World};
 use crate::scene_check;
 pub use crate::scene_check::SceneError;
 use glam::DVec3;
@@ -202,77 +199,6 @@ impl Scene {
     /// The material of triangle `tri`.
     pub fn material(&self, tri: u32) -> &Surface {
         &self.surfaces[self.geometry.prims[tri as usize].shape as usize]
-    }
-}
-
-impl World for Scene {
-    type S = D3;
-    type Region = Region;
-
-    fn scale(&self) -> f64 {
-        self.scale
-    }
-
-    #[inline]
-    fn closest_hit(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> Option<Hit> {
-        let (t, prim, u, v) = self.geometry.closest_hit(o, d, self.t_min(), t_max, skip)?;
-        Some(Hit { t, prim, u, v })
-    }
-
-    #[inline]
-    fn occluded(&self, o: DVec3, d: DVec3, t_max: f64, skip: Option<u32>) -> bool {
-        self.geometry.occluded(o, d, self.t_min(), t_max, skip)
-    }
-
-    fn centre(&self) -> DVec3 {
-        0.5 * (self.bounds.min + self.bounds.max)
-    }
-
-    fn medium(&self) -> Option<&Medium> {
-        self.medium.as_ref()
-    }
-
-    fn surface(&self, hit: &Hit, dir: DVec3) -> SurfacePoint<D3> {
-        let tri = &self.geometry.prims[hit.prim as usize];
-        let surf = &self.surfaces[tri.shape as usize];
-        let facing = tri.normal.dot(dir) < 0.0;
-        SurfacePoint {
-            point: tri.point_at(hit.u, hit.v),
-            normal: if facing { tri.normal } else { -tri.normal },
-            active: facing || surf.two_sided,
-            emission: surf.emission,
-            reflectance: surf.reflectance,
-        }
-    }
-
-    fn delta_lights(&self, p: DVec3, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-        lights::delta_lights(self, p, lobe, skip, rays)
-    }
-
-    fn sampled_nee(&self, p: DVec3, lobe: &Lobe, skip: Option<u32>, mis: bool, s: &mut Sampler, rays: &mut u64) -> Rgb {
-        lights::distant_nee(self, p, lobe, skip, mis, s, rays) + lights::emitter_nee(self, p, lobe, skip, mis, s, rays)
-    }
-
-    fn emitter_pdf(&self, from: DVec3, prim: u32, y: DVec3) -> f64 {
-        lights::emitter_pdf(self, from, prim, y)
-    }
-
-    fn escaped(&self, w: DVec3, lobe_pdf: Option<f64>) -> Rgb {
-        lights::escaped_radiance(self, w, lobe_pdf)
-    }
-
-    /// The sky: sun cones are far narrower than a probe ray's solid angle, so they
-    /// are evaluated with the direct part instead.
-    fn escaped_probe(&self, _w: DVec3) -> Rgb {
-        self.sky
-    }
-
-    fn direct_part(&self, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: &mut u64) -> Rgb {
-        lights::direct_part(self, p, lobe, s, rays)
-    }
-
-    fn direct_lights(&self, x: DVec3) -> (Vec<DirectLight<D3>>, u64) {
-        lights::gather_direct(self, x)
     }
 }
 

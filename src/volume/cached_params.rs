@@ -1,0 +1,37 @@
+//! What a cached 3D render covers ([`CachedRenderParams`]) and the 3D names of the
+//! pipeline's cache types: the vocabulary that placement ([`super::cached`]),
+//! reconstruction ([`super::reconstruct`]) and the records file share, apart from
+//! all three so that none imports another for it.
+
+use super::render::RenderParams;
+use super::scene::Scene;
+use crate::core::space::D3;
+use serde::Serialize;
+
+pub type RecordMemo = crate::pipeline::placement::RecordMemo<D3>;
+pub type RadianceCache = crate::pipeline::placement::RadianceCache<D3>;
+pub type Placement = crate::pipeline::placement::Placement<D3>;
+pub type RecordInfo = crate::pipeline::record::RecordInfo<D3>;
+
+/// The image a cached render covers and how camera rays are marched.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CachedRenderParams {
+    /// Size, window, camera samples per pixel, seed, path settings (no time budget).
+    pub image: RenderParams,
+    /// Distance Δ between march points along camera rays (scene units).
+    pub march_step: f64,
+    /// Reflected-light samples (NEE + a path each) per camera sample at the first
+    /// surface: surfaces are path traced as in the reference, at a cost far below
+    /// a record's, so they need not be the noise floor of a cached image.
+    pub surface_paths: u32,
+}
+
+impl CachedRenderParams {
+    pub fn from_scene(scene: &Scene) -> Self {
+        CachedRenderParams {
+            image: RenderParams::from_scene(scene),
+            march_step: scene.scale / 128.0,
+            surface_paths: 4,
+        }
+    }
+}
