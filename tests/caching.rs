@@ -6,6 +6,7 @@ use glam::DVec2;
 use volcache::flatland::cached_field::{CacheMethod, CacheSettings, CachedField, RecordMemo, render_cached};
 use volcache::flatland::field::{Field, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
+use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 
 fn load(path: &str) -> Scene {
@@ -63,6 +64,27 @@ fn equal_count_mode_hits_the_target() {
             "{method:?}: {} records",
             f.record_count()
         );
+    }
+}
+
+/// A count no ε reaches is an error naming the nearest count, not a field with far
+/// fewer records: around a point light in fog with no surfaces, Jarosz 2008's
+/// gradients are near zero, its circles reach the maximum radius, and the count
+/// stays small whatever ε (it returned 9 records for 100 without a word).
+#[test]
+fn an_unreachable_count_is_an_error() {
+    let scene = load("flatland_scenes/point_in_fog.json");
+    let mut fp = params(&scene, 32, 32);
+    fp.quantity = volcache::flatland::scene_desc::Quantity::Ls;
+    let cs = settings(CacheMethod::Jarosz08, 1);
+    let r = render_cached(&scene, &fp, &cs, Some(100), &mut RecordMemo::new(), &Progress::new());
+    match r {
+        Err(CountError::Unreachable { target, best, eps }) => {
+            assert_eq!(target, 100);
+            assert!(best < 95 && eps.is_finite(), "{best} records at ε {eps}");
+        }
+        Err(e) => panic!("{e}"),
+        Ok(f) => panic!("{} records for a target of 100", f.record_count()),
     }
 }
 

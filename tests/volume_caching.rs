@@ -7,6 +7,7 @@ use std::path::Path;
 use volcache::core::color::{Rgb, luminance};
 use volcache::core::metric::CacheMethod;
 use volcache::core::stats::ImageErrors;
+use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
     CacheSettings, CachedRenderParams, RecordMemo, default_eps, march_reference, place, reconstruct, render_cached,
@@ -72,11 +73,27 @@ fn ours_beats_jarosz08_at_equal_cache_count_on_the_staircase() {
     );
     let mut sums = [0.0; 2];
     let mut ratios = Vec::new();
-    for seed in 1..=4 {
+    // A count can be out of reach for a record seed: placement counts jump with ε
+    // (seed 4 of Jarosz 2008 goes from 88 to 35 records within 1.2% of ε, nothing
+    // between), and the search then reports an error. Such a seed is reported and
+    // the next one compared instead.
+    let mut unreachable = Vec::new();
+    for seed in 1..=6 {
+        if ratios.len() == 4 {
+            break;
+        }
         let mut rmse = [0.0; 2];
         for (k, method) in [CacheMethod::Ours, CacheMethod::Jarosz08].into_iter().enumerate() {
             let cs = settings(method, &s, 512, 12, seed);
-            let r = render_cached(&s, &p, &cs, Some(60), &mut RecordMemo::new(), &Progress::new()).unwrap();
+            let r = match render_cached(&s, &p, &cs, Some(60), &mut RecordMemo::new(), &Progress::new()) {
+                Ok(r) => r,
+                Err(e @ CountError::Unreachable { .. }) => {
+                    eprintln!("seed {seed} {method:?}: {e}");
+                    unreachable.push((seed, method));
+                    break;
+                }
+                Err(e) => panic!("{e}"),
+            };
             let e = errors(&r.reconstruction.image.medium, &reference);
             let own = (e.rmse.powi(2) - noise2).max(0.0).sqrt();
             eprintln!(
@@ -91,17 +108,24 @@ fn ours_beats_jarosz08_at_equal_cache_count_on_the_staircase() {
                 r.rays()
             );
             assert_eq!(r.reconstruction.uncovered, 0);
-            // Placement counts are chaotic in ε (core::equal_count): ±10%.
-            assert!((r.placement.record_count() as f64 - 60.0).abs() <= 6.0);
+            // Within the equal-count search's acceptance (5%).
+            assert!((r.placement.record_count() as f64 - 60.0).abs() <= 3.0);
             rmse[k] = own;
-            sums[k] += own;
             assert!(e.rmse.powi(2) > 1.5 * noise2, "the reference is too noisy to judge");
         }
-        ratios.push(rmse[0] / rmse[1]);
+        if unreachable.last().is_none_or(|u| u.0 != seed) {
+            sums[0] += rmse[0];
+            sums[1] += rmse[1];
+            ratios.push(rmse[0] / rmse[1]);
+        }
     }
+    assert!(
+        ratios.len() == 4 && unreachable.len() <= 2,
+        "unreachable: {unreachable:?}"
+    );
     let ratio = sums[0] / sums[1];
     eprintln!("RMSE ours / jarosz08 per seed: {ratios:.3?}; of the means over seeds {ratio:.3}");
-    // Measured: per seed 0.19, 0.32, 0.84, 0.53, of the means 0.36. Jarosz 2008's
+    // Measured: per seed (1, 2, 3, 5) 0.48, 0.67, 0.43, 0.37, of the means 0.46. Jarosz 2008's
     // error swings with its seed (1.6e-2 to 7e-2: a few records with wrong gradients
     // extrapolate far); ours stays at 1.3–1.6e-2.
     assert!(ratio < 0.7, "{ratios:?}");

@@ -281,7 +281,7 @@ fn compare3d_and_tradeoff3d_write_their_reports() {
     };
     let finite = |v: &serde_json::Value| v.as_f64().is_some_and(f64::is_finite);
 
-    run(&["figure", "compare3d", "--caches", "8"]);
+    run(&["figure", "compare3d", "--caches", "24"]);
     for f in [
         "compare3d_fog_box.png",
         "fog_box_ours.exr",
@@ -306,7 +306,7 @@ fn compare3d_and_tradeoff3d_write_their_reports() {
         );
     }
 
-    run(&["bench", "tradeoff3d", "--counts", "4,8", "--spps", "1,4"]);
+    run(&["bench", "tradeoff3d", "--counts", "24,48", "--spps", "1,4"]);
     assert!(d.join("tradeoff3d_fog_box.png").is_file());
     let t = read("tradeoff3d_fog_box.json");
     assert_eq!(t["reference"]["from_disk"], true, "the reference is reused");

@@ -12,6 +12,7 @@ use super::jobs::{Job, Notify, Priority, Reporter};
 use crate::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo};
 use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use crate::flatland::scene::Scene;
+use crate::pipeline::placement::CountError;
 use crate::study::field_runs::{self, TimedRun, eps_for_count, timed_run};
 use crate::study::seeds::reference_seed;
 use std::sync::Arc;
@@ -164,26 +165,34 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
             r.send(Arc::new(res.clone()));
             let target = params.caches.max(1);
             for method in METHODS {
-                let cs = params.cache_settings(method, &fp);
                 let name = method_label(method);
-                r.stage(format!("compare: {name}, searching ε for {target} records"));
-                let found = eps_for_count(&scene, &fp, &cs, target, r.progress())?;
-                let eps = found.eps;
-                r.add_rays(found.rays);
-                r.stage(format!("compare: {name}, timed run at ε = {eps:.3e}"));
-                let cs = CacheSettings { eps, ..cs };
-                let TimedRun { cached: f, seconds } = timed_run(&scene, &fp, &cs, r.progress())?;
-                let rays = f.placement_rays + f.reconstruction_rays;
-                r.add_rays(rays);
-                res.runs.push(MethodRun {
-                    method,
-                    eps,
-                    records: f.records.concat(),
-                    errors: field_errors(&f.field, &res.reference),
-                    field: f.field,
-                    rays,
-                    seconds,
-                });
+                let run = || -> Result<MethodRun, CountError> {
+                    let cs = params.cache_settings(method, &fp);
+                    r.stage(format!("compare: {name}, searching ε for {target} records"));
+                    let found = eps_for_count(&scene, &fp, &cs, target, r.progress())?;
+                    let eps = found.eps;
+                    r.add_rays(found.rays);
+                    r.stage(format!("compare: {name}, timed run at ε = {eps:.3e}"));
+                    let cs = CacheSettings { eps, ..cs };
+                    let TimedRun { cached: f, seconds } = timed_run(&scene, &fp, &cs, r.progress())?;
+                    let rays = f.placement_rays + f.reconstruction_rays;
+                    r.add_rays(rays);
+                    Ok(MethodRun {
+                        method,
+                        eps,
+                        records: f.records.concat(),
+                        errors: field_errors(&f.field, &res.reference),
+                        field: f.field,
+                        rays,
+                        seconds,
+                    })
+                };
+                match run() {
+                    Ok(run) => res.runs.push(run),
+                    Err(CountError::Cancelled(c)) => return Err(c),
+                    // Out of reach for this method: say so and compare the others.
+                    Err(e) => r.stage(format!("compare: {name}: {e}")),
+                }
                 r.send(Arc::new(res.clone()));
             }
             Ok(())

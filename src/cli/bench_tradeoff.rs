@@ -14,6 +14,7 @@ use volcache::figure::gradient_figure::{AWARE_PURPLE, REFERENCE_BLUE, UNAWARE_OR
 use volcache::figure::plot::{LineStyle, Plot, Series, draw_plot_into};
 use volcache::flatland::field::FieldParams;
 use volcache::output::{write_json, write_png};
+use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 use volcache::study::field_runs::{FieldMethod, MethodRun};
 use volcache::study::reference2d::ReferenceInfo;
@@ -67,7 +68,15 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                 caches: Some(k),
                 ..a.cache.clone()
             };
-            let run = run_method(&scene, &fp, method, 0, &target, &reference, &progress)?;
+            let run = match run_method(&scene, &fp, method, 0, &target, &reference, &progress) {
+                Ok(run) => run,
+                // A count out of reach of this method is left out of its curve.
+                Err(e @ CountError::Unreachable { .. }) => {
+                    eprintln!("{method:?} {k:>5}: skipped: {e}");
+                    continue;
+                }
+                Err(e) => return Err(e.into()),
+            };
             eprintln!(
                 "{method:?} {k:>5}: {} records, {:.2} s, RMSE {:.4e}",
                 run.records,

@@ -17,6 +17,7 @@ use volcache::figure::axis::Axis;
 use volcache::figure::gradient_figure::{AWARE_PURPLE, REFERENCE_BLUE, UNAWARE_ORANGE};
 use volcache::figure::plot::{LineStyle, Plot, Series, draw_plot_into};
 use volcache::output::{write_json, write_png};
+use volcache::pipeline::placement::CountError;
 use volcache::study::reference3d::ReferenceInfo3d;
 use volcache::study::runs3d::{Run3d, curve, pt_run};
 use volcache::study::seeds::pt_seed;
@@ -65,7 +66,15 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
         let mut memo = RecordMemo::new();
         for &k in &a.counts {
             let label = format!("{stem} {method:?} {k}");
-            let r = run_cache(&setup, method, &a.cache, Some(k), &mut memo, &label, a.quiet)?;
+            let r = match run_cache(&setup, method, &a.cache, Some(k), &mut memo, &label, a.quiet) {
+                Ok(r) => r,
+                // A count out of reach of this method is left out of its curve.
+                Err(e) if matches!(e.downcast_ref(), Some(CountError::Unreachable { .. })) => {
+                    eprintln!("{method:?} {k:>5}: skipped: {e}");
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
             eprintln!(
                 "{:>8} {k:>5}: {} records, {:.2} s ({:.2} placement), RMSE {:.4e}, medium {:.4e}",
                 r.method, r.records, r.seconds, r.placement_seconds, r.errors.rmse, r.medium_errors.rmse

@@ -11,7 +11,8 @@ use volcache::flatland::cached_field::{CacheMethod, CacheSettings};
 use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::scene::Scene;
 use volcache::output::{write_exr, write_json, write_png};
-use volcache::progress::{Cancelled, Progress};
+use volcache::pipeline::placement::CountError;
+use volcache::progress::Progress;
 use volcache::study::field_runs::{self, FieldMethod, MethodRun, cache_run, pt_run};
 use volcache::study::reference2d::{ReferenceInfo, reference_field};
 use volcache::study::seeds::reference_seed;
@@ -96,10 +97,10 @@ pub fn run_method(
     a: &CacheArgs,
     reference: &Field,
     progress: &Progress,
-) -> Result<MethodRun, Cancelled> {
+) -> Result<MethodRun, CountError> {
     match method.cache_method() {
         Some(m) => cache_run(scene, fp, &cache_settings(m, a, fp), a.caches, reference, progress),
-        None => pt_run(scene, fp, spp, reference, progress),
+        None => Ok(pt_run(scene, fp, spp, reference, progress)?),
     }
 }
 
@@ -133,9 +134,13 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     let ui = ProgressUi::new(&format!("{stem} {:?}", a.method), !a.cache.quiet);
     let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &reference, &ui.progress);
     ui.finish();
-    let Ok(run) = run else {
-        eprintln!("cancelled: no output written");
-        return Ok(ExitCode::from(130));
+    let run = match run {
+        Ok(run) => run,
+        Err(CountError::Cancelled(_)) => {
+            eprintln!("cancelled: no output written");
+            return Ok(ExitCode::from(130));
+        }
+        Err(e) => anyhow::bail!("--caches: {e}"),
     };
     write_outputs(&a.out, &scene, &run, &reference)?;
     let e = run.errors.unwrap_or_default();

@@ -14,6 +14,7 @@ use volcache::figure::{
 };
 use volcache::flatland::field::FieldParams;
 use volcache::output::{write_json, write_png};
+use volcache::pipeline::placement::CountError;
 use volcache::study::field_runs::{FieldMethod, MethodRun};
 use volcache::study::reference2d::ReferenceInfo;
 
@@ -63,9 +64,13 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
         let ui = ProgressUi::new(&format!("{stem} {method:?}"), !cache.quiet);
         let r = run_method(&scene, &fp, method, 0, &cache, &reference, &ui.progress);
         ui.finish();
-        let Ok(r) = r else {
-            eprintln!("cancelled: no output written");
-            return Ok(ExitCode::from(130));
+        let r = match r {
+            Ok(r) => r,
+            Err(CountError::Cancelled(_)) => {
+                eprintln!("cancelled: no output written");
+                return Ok(ExitCode::from(130));
+            }
+            Err(e) => anyhow::bail!("{method:?} at --caches: {e}"),
         };
         runs.push(r);
     }

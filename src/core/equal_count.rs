@@ -3,13 +3,16 @@
 //! average: a record placed earlier changes what later points see, so the count can
 //! jump by ±50% within 1% of ε (seen with Jarosz 2008's noisy gradient balls in 3D).
 //! This brackets the target in log ε, bisects, and if the bisection ends outside the
-//! tolerance, probes ε a few tenths of a percent around the best attempt, keeping
-//! the closest.
+//! tolerance, probes ε around the best attempt — a few tenths of a percent apart
+//! close to it, then a percent apart out to ±15% — keeping the closest.
 
-/// Probes around the bisection's best ε when the count is chaotic there, and their
-/// relative spacing.
-const PROBES: usize = 24;
-const PROBE_STEP: f64 = 0.003;
+/// Relative offsets of the probes around the bisection's best ε, nearest first,
+/// alternating sides: 0.3% apart out to ±3.6%, then 1% apart out to ±15%.
+fn probe_offsets() -> impl Iterator<Item = f64> {
+    let near = (1..=12).map(|k| 0.003 * k as f64);
+    let far = (4..=15).map(|k| 0.01 * k as f64);
+    near.chain(far).flat_map(|d| [d, -d])
+}
 
 /// Search ε from `eps0` until `place(ε)` reports within ±`tol` of `target` records
 /// (or the bracket closes): returns the closest attempt's result and its ε. More
@@ -67,12 +70,11 @@ pub fn search_eps<T, E>(
         }
     }
     let centre = best_eps;
-    for k in 1..=PROBES {
+    for d in probe_offsets() {
         if miss(best.0) <= tol {
             break;
         }
-        let sign = if k % 2 == 1 { 1.0 } else { -1.0 };
-        let eps = centre * (1.0 + sign * PROBE_STEP * k.div_ceil(2) as f64);
+        let eps = centre * (1.0 + d);
         let r = place(eps)?;
         if miss(r.0) < miss(best.0) {
             (best, best_eps) = (r, eps);

@@ -16,11 +16,13 @@ use crate::core::color::Rgb;
 pub use crate::core::metric::CacheMethod;
 use crate::core::rng::Sampler;
 use crate::core::space::D2;
-use crate::pipeline::placement::{Placement, QueryPoint, QuerySource, interpolate, place, place_with_count};
+use crate::pipeline::placement::{
+    CountError, Placement, QueryPoint, QuerySource, interpolate, place, place_with_count,
+};
 use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::Cached;
 use crate::pipeline::world::World;
-use crate::progress::{Cancelled, Progress};
+use crate::progress::Progress;
 use glam::DVec2;
 use rayon::prelude::*;
 
@@ -97,7 +99,8 @@ fn cached_parts(cs: &CacheSettings, part: Part) -> &'static [Cached] {
 }
 
 /// Place records at `cs.eps` (or at the ε giving `target` records) and reconstruct
-/// the field of `fp.part` (direct evaluated per pixel).
+/// the field of `fp.part` (direct evaluated per pixel). An error when cancelled, or
+/// when no ε gives about `target` records.
 pub fn render_cached(
     scene: &Scene,
     fp: &FieldParams,
@@ -105,7 +108,7 @@ pub fn render_cached(
     target: Option<usize>,
     memo: &mut RecordMemo,
     progress: &Progress,
-) -> Result<CachedField, Cancelled> {
+) -> Result<CachedField, CountError> {
     let field = Field::new(fp.width, fp.height, scene.domain_min, scene.domain_max);
     let source = FieldPixels {
         scene,

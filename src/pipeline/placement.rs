@@ -168,8 +168,26 @@ pub fn place<W: World, Q: QuerySource<W::S>>(
     })
 }
 
+/// Why an equal-count placement has no result.
+#[derive(Debug, thiserror::Error)]
+pub enum CountError {
+    #[error("cancelled")]
+    Cancelled(#[from] Cancelled),
+    /// Placement counts jump with ε (a record placed earlier changes what later
+    /// points see), and some counts are out of reach.
+    #[error(
+        "no error threshold places {target} records (±{ACCEPT_PERCENT}%): the nearest is {best} records \
+         at ε = {eps:.4e}; try another count or record seed"
+    )]
+    Unreachable { target: usize, best: usize, eps: f64 },
+}
+
+/// How far from the target an equal-count placement may end, in percent.
+pub const ACCEPT_PERCENT: f64 = 5.0;
+
 /// Equal-count mode: search ε (`core::equal_count`) until placement makes `target`
-/// records (±1%), reusing memoised light fields.
+/// records (±1%, or the nearest within ±[`ACCEPT_PERCENT`]), reusing memoised
+/// light fields; an error when no ε comes that close.
 pub fn place_with_count<W: World, Q: QuerySource<W::S>>(
     world: &W,
     source: &Q,
@@ -178,12 +196,16 @@ pub fn place_with_count<W: World, Q: QuerySource<W::S>>(
     target: usize,
     memo: &mut RecordMemo<W::S>,
     progress: &Progress,
-) -> Result<Placement<W::S>, Cancelled> {
+) -> Result<Placement<W::S>, CountError> {
     let tol = (target as f64 * 0.01).max(1.0);
-    let (placement, _) = crate::core::equal_count::search_eps(target, tol, cs.eps, |eps| {
+    let (placement, eps) = crate::core::equal_count::search_eps(target, tol, cs.eps, |eps| {
         let c = CacheSettings { eps, ..cs.clone() };
         place(world, source, &c, cached, memo, progress).map(|p| (p.record_count(), p))
     })?;
+    let best = placement.record_count();
+    if (best as f64 - target as f64).abs() > tol.max(target as f64 * ACCEPT_PERCENT / 100.0) {
+        return Err(CountError::Unreachable { target, best, eps });
+    }
     Ok(placement)
 }
 

@@ -10,6 +10,7 @@ use crate::core::space::D2;
 use crate::flatland::cached_field::{CacheSettings, CachedField, RecordInfo, RecordMemo, render_cached};
 use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use crate::flatland::scene::Scene;
+use crate::pipeline::placement::CountError;
 use crate::progress::{Cancelled, Progress};
 use serde::Serialize;
 use std::time::Instant;
@@ -97,7 +98,7 @@ pub fn eps_for_count(
     cs: &CacheSettings,
     target: usize,
     progress: &Progress,
-) -> Result<EpsSearch, Cancelled> {
+) -> Result<EpsSearch, CountError> {
     let mut memo = RecordMemo::new();
     let eps = render_cached(scene, fp, cs, Some(target.max(1)), &mut memo, progress)?.eps;
     Ok(EpsSearch {
@@ -121,7 +122,7 @@ pub fn timed_run(
     fp: &FieldParams,
     cs: &CacheSettings,
     progress: &Progress,
-) -> Result<TimedRun, Cancelled> {
+) -> Result<TimedRun, CountError> {
     let start = Instant::now();
     let cached = render_cached(scene, fp, cs, None, &mut RecordMemo::new(), progress)?;
     Ok(TimedRun {
@@ -139,7 +140,7 @@ pub fn cache_run(
     target: Option<usize>,
     reference: &Field,
     progress: &Progress,
-) -> Result<MethodRun, Cancelled> {
+) -> Result<MethodRun, CountError> {
     let eps = match target {
         Some(k) => eps_for_count(scene, fp, cs, k, progress)?.eps,
         None => cs.eps,
@@ -240,9 +241,9 @@ mod tests {
         let p = Progress::new();
         p.cancel();
         let reference = Field::new(12, 12, scene.domain_min, scene.domain_max);
-        assert_eq!(
-            cache_run(&scene, &fp, &cs, Some(6), &reference, &p).err(),
-            Some(Cancelled)
-        );
+        assert!(matches!(
+            cache_run(&scene, &fp, &cs, Some(6), &reference, &p),
+            Err(CountError::Cancelled(Cancelled))
+        ));
     }
 }

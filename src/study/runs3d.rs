@@ -9,7 +9,8 @@
 
 use crate::core::metric::CacheMethod;
 use crate::core::stats::{ImageErrors, luminance_errors};
-use crate::progress::{Cancelled, Progress};
+use crate::pipeline::placement::CountError;
+use crate::progress::Progress;
 use crate::volume::cached::{CacheSettings, CachedRenderParams, RecordInfo, RecordMemo, render_cached};
 use crate::volume::render::{RenderParams, Rendered, render};
 use crate::volume::scene::Scene;
@@ -82,7 +83,7 @@ pub fn cache_run(
     memo: &mut RecordMemo,
     reference: &Rendered,
     progress: &Progress,
-) -> Result<Run3d, Cancelled> {
+) -> Result<Run3d, CountError> {
     let r = render_cached(scene, cp, cs, target, memo, progress)?;
     let placement = r.placement;
     let mut run = Run3d::rendered(method_name(cs.method), r.reconstruction.image, reference);
@@ -101,7 +102,7 @@ pub fn pt_run(
     image: &RenderParams,
     reference: &Rendered,
     progress: &Progress,
-) -> Result<Run3d, Cancelled> {
+) -> Result<Run3d, CountError> {
     let img = render(scene, image, progress)?;
     Ok(Run3d::rendered("pt", img, reference))
 }
@@ -149,7 +150,7 @@ mod tests {
             image: image.clone(),
             ..CachedRenderParams::from_scene(&scene)
         };
-        let run = cache_run(&scene, &cs, &cp, Some(3), &mut RecordMemo::new(), &reference, &p).unwrap();
+        let run = cache_run(&scene, &cs, &cp, Some(12), &mut RecordMemo::new(), &reference, &p).unwrap();
         assert_eq!(run.method, "ours");
         assert_eq!(run.records, run.record_list.len());
         assert!(run.records > 0 && run.eps.is_some());

@@ -24,6 +24,7 @@ use crate::core::cache::placement_order;
 use crate::core::metric::CacheMethod;
 use crate::core::rng::mix64;
 use crate::core::space::D3;
+pub use crate::pipeline::placement::CountError;
 use crate::pipeline::placement::{QueryPoint, QuerySource, place as place_points, place_with_count as place_count};
 use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::Cached;
@@ -122,7 +123,7 @@ pub fn place_with_count(
     target: usize,
     memo: &mut RecordMemo,
     progress: &Progress,
-) -> Result<Placement, Cancelled> {
+) -> Result<Placement, CountError> {
     let source = CameraSamples::new(scene, params);
     place_count(scene, &source, cs, &[Cached::Scattered], target, memo, progress)
 }
@@ -153,7 +154,7 @@ pub fn render_cached(
     target: Option<usize>,
     memo: &mut RecordMemo,
     progress: &Progress,
-) -> Result<CachedRender, Cancelled> {
+) -> Result<CachedRender, CountError> {
     let placement = match target {
         Some(n) => place_with_count(scene, params, cs, n, memo, progress)?,
         None => place(scene, params, cs, memo, progress)?,
