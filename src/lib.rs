@@ -19,5 +19,6 @@ pub mod figure;
 pub mod flatland;
 pub mod output;
 pub mod progress;
+pub mod limits;
 pub mod scene_check;
 pub mod volume;

@@ -2,6 +2,7 @@
 //! triangles), boxes (twelve, optionally rotated about y) and OBJ meshes (tobj).
 //! Every triangle keeps the index of the shape it came from (its material).
 
+use crate::limits::MAX_COORD;
 use glam::{DMat3, DVec3};
 use std::path::Path;
 
@@ -116,15 +117,60 @@ pub fn cuboid(min: DVec3, max: DVec3, rotate_y_deg: f64, shape: u32) -> Vec<Tria
         .collect()
 }
 
+/// Every vertex line (`v x y z …`) of an OBJ text has three finite coordinates
+/// that lie within ±[`MAX_COORD`] once scaled and translated; errors name the file
+/// and the line. (tobj would read `nan` or `1e39` as an f32 NaN or inf, and the
+/// triangles using it would silently vanish.)
+pub fn check_vertices(file: &str, text: &str, scale: DVec3, translate: DVec3) -> Result<(), String> {
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        let at = format!("`{file}` line {}", n + 1);
+        let mut p = [0.0; 3];
+        for (k, slot) in p.iter_mut().enumerate() {
+            let w = words
+                .next()
+                .ok_or_else(|| format!("{at}: a vertex needs three coordinates"))?;
+            let v: f64 = w
+                .parse()
+                .map_err(|_| format!("{at}: vertex coordinate `{w}` is not a number"))?;
+            if !v.is_finite() || v.abs() > f32::MAX as f64 {
+                return Err(format!("{at}: vertex coordinate `{w}` is not a finite number"));
+            }
+            *slot = v * scale[k] + translate[k];
+            if slot.abs() > MAX_COORD {
+                return Err(format!(
+                    "{at}: the vertex lies at {:e} once scaled and translated, beyond ±{MAX_COORD:e}",
+                    *slot
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Triangles of every model in an OBJ file, each vertex scaled then translated.
+/// Zero-area faces are dropped (they neither block nor emit light).
 pub fn load_obj(path: &Path, scale: DVec3, translate: DVec3, shape: u32) -> Result<Vec<Triangle>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot load `{}`: {e}", path.display()))?;
+    parse_obj(&bytes, &path.display().to_string(), scale, translate, shape)
+}
+
+/// [`load_obj`] on the bytes of an OBJ file named `file` (materials are not read:
+/// surfaces come from the scene).
+pub fn parse_obj(bytes: &[u8], file: &str, scale: DVec3, translate: DVec3, shape: u32) -> Result<Vec<Triangle>, String> {
+    check_vertices(file, &String::from_utf8_lossy(bytes), scale, translate)?;
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| format!("cannot load `{}`: {e}", path.display()))?;
+    let no_materials = |_: &Path| Ok((Vec::new(), Default::default()));
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, no_materials)
+        .map_err(|e| format!("cannot load `{file}`: {e}"))?;
     let mut tris = Vec::new();
     for m in &models {
         let pos = &m.mesh.positions;
@@ -132,14 +178,14 @@ pub fn load_obj(path: &Path, scale: DVec3, translate: DVec3, shape: u32) -> Resu
             let k = 3 * i as usize;
             pos.get(k..k + 3)
                 .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * scale + translate)
-                .ok_or_else(|| format!("`{}`: vertex index {} out of range", path.display(), i + 1))
+                .ok_or_else(|| format!("`{file}`: vertex index {} out of range", i + 1))
         };
         for f in m.mesh.indices.chunks_exact(3) {
             tris.extend(Triangle::new(vertex(f[0])?, vertex(f[1])?, vertex(f[2])?, shape));
         }
     }
     if tris.is_empty() {
-        return Err(format!("`{}` has no triangles", path.display()));
+        return Err(format!("`{file}` has no triangles"));
     }
     Ok(tris)
 }
