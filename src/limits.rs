@@ -75,15 +75,11 @@ pub fn zero_or_within(v: f64, (lo, hi): (f64, f64)) -> bool {
 /// The problem with a resolution, if any.
 pub fn resolution_problem(w: u32, h: u32) -> Option<String> {
     if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
-        return Some(format!(
-            "must be between 1 and {MAX_SIDE} pixels per side, got {w}x{h}"
-        ));
+        return Some(format!("must be between 1 and {MAX_SIDE} pixels per side, got {w}x{h}"));
     }
     let pixels = w as u64 * h as u64;
     (pixels > MAX_PIXELS).then(|| {
-        format!(
-            "{w}x{h} is {pixels} pixels; at most {MAX_PIXELS} (e.g. 4096x4096) fit in memory with their statistics"
-        )
+        format!("{w}x{h} is {pixels} pixels; at most {MAX_PIXELS} (e.g. 4096x4096) fit in memory with their statistics")
     })
 }
 

@@ -158,7 +158,10 @@ impl Checker {
         if d < min || d == 0.0 {
             self.fail(
                 path,
-                format!("{what}: {d:e} apart, less than {:e} of the scene size ({min:e})", limits::MIN_SEPARATION),
+                format!(
+                    "{what}: {d:e} apart, less than {:e} of the scene size ({min:e})",
+                    limits::MIN_SEPARATION
+                ),
             );
             return false;
         }
@@ -172,12 +175,19 @@ impl Checker {
         if size < limits::MIN_SCENE_SIZE {
             self.fail(
                 path,
-                format!("the scene is {size:e} across; it must be at least {:e}", limits::MIN_SCENE_SIZE),
+                format!(
+                    "the scene is {size:e} across; it must be at least {:e}",
+                    limits::MIN_SCENE_SIZE
+                ),
             );
             return false;
         }
         if reach > limits::MAX_SIZES_FROM_ORIGIN * size {
-            let at = if extent.farthest.is_empty() { path } else { &extent.farthest };
+            let at = if extent.farthest.is_empty() {
+                path
+            } else {
+                &extent.farthest
+            };
             self.fail(
                 at,
                 format!(

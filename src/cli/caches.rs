@@ -1,8 +1,11 @@
 //! `volcache caches`: reconstruct a scene's field from a radiance cache (ours or
 //! Jarosz et al. 2008) or by path tracing, and measure it against a reference.
 
-use super::common::{ProgressUi, load_scene, parse_res, scene_stem, wrote};
-use super::reference::{ReferenceInfo, reference_field};
+use super::common::{
+    CACHES_BYTES_PER_PIXEL, ProgressUi, check_count, check_plan, check_range, check_spp, ensure_memory, exr_bytes,
+    load_scene, parse_res, png_bytes, scene_stem, write_outputs,
+};
+use super::reference::{ReferenceInfo, reference_field, reference_files};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -13,7 +16,8 @@ use volcache::flatland::cached_field::{
 };
 use volcache::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
-use volcache::output::{write_exr, write_json, write_png};
+use volcache::limits;
+use volcache::output::OutputPlan;
 use volcache::progress::Progress;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
@@ -126,7 +130,7 @@ pub fn run_method(
     a: &CacheArgs,
     progress: &Progress,
 ) -> anyhow::Result<MethodRun> {
-    let cancelled = |_| anyhow::anyhow!("cancelled");
+    let cancelled = |_| anyhow::Error::from(volcache::progress::Cancelled);
     Ok(match method {
         MethodArg::Pt => {
             let p = FieldParams { spp, ..fp.clone() };
@@ -202,28 +206,49 @@ struct Summary<'a> {
     reference: &'a ReferenceInfo,
 }
 
+/// Check the options `caches`, `figure compare` and `bench tradeoff` share.
+pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
+    if let Some(eps) = a.eps {
+        check_range("--eps", eps, limits::EPS)?;
+    }
+    if let Some(k) = a.caches {
+        check_count("--caches", k as u64, (fp.width * fp.height) as u64)?;
+    }
+    check_count("--rays", a.rays as u64, 1 << 20)?;
+    check_count("--steps", a.steps as u64, 4096)?;
+    check_spp("--ref-spp", a.ref_spp, limits::MAX_SPP)?;
+    ensure_memory(fp.width * fp.height, CACHES_BYTES_PER_PIXEL, "the field")
+}
+
 pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
+    check_cache_args(&a.cache, &fp)?;
+    check_spp("--spp", a.spp, limits::MAX_SPP)?;
     let ref_fp = FieldParams {
         spp: a.cache.ref_spp,
         seed: a.cache.seed ^ 0x5EED,
         ..fp.clone()
     };
+    let mut plan = OutputPlan::new();
+    if let Some(s) = &a.scene {
+        plan.input("the scene", s);
+    }
+    for name in OUTPUTS {
+        plan.output(format!("--out {}", a.out.display()), &a.out.join(name));
+    }
+    let (ref_exr, ref_json) = reference_files(&scene, &ref_fp, &a.cache.ref_cache);
+    plan.output("--ref-cache", &ref_exr).output("--ref-cache", &ref_json);
+    check_plan(&plan)?;
+
     let (reference, ref_info) = reference_field(&scene, &ref_fp, &a.cache.ref_cache, a.cache.quiet)?;
     let ui = ProgressUi::new(&format!("{stem} {:?}", a.method), !a.cache.quiet);
-    let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &ui.progress);
+    let progress = ui.progress.clone();
+    let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &progress);
     ui.finish();
-    let mut run = match run {
-        Ok(r) => r,
-        Err(_) => {
-            eprintln!("cancelled: no output written");
-            return Ok(ExitCode::from(130));
-        }
-    };
+    let mut run = run?;
     run.errors = Some(field_errors(&run.field, &reference));
-    write_outputs(&a.out, &scene, &run, &reference)?;
     let e = run.errors.unwrap_or_default();
     eprintln!(
         "{:?}: {} records, {:.2} s (placement {:.2} s), {} rays; RMSE {:.4e}, relMSE {:.4e} (reference {} spp, rel. std error {:.2}%)",
@@ -246,22 +271,33 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         run: &run,
         reference: &ref_info,
     };
+    let files = output_files(&a.out, &scene, &run, &reference)?;
     let json = a.out.join("summary.json");
-    wrote(&json, write_json(&json, &summary))?;
-    Ok(ExitCode::SUCCESS)
+    write_outputs(files, Some((&json, serde_json::to_value(&summary)?)), &progress)
 }
 
-fn write_outputs(dir: &Path, scene: &Scene, run: &MethodRun, reference: &Field) -> anyhow::Result<()> {
+/// Every file `caches` may write into its folder (the summary last).
+const OUTPUTS: [&str; 5] = ["field.png", "field.exr", "error.png", "records.png", "summary.json"];
+
+fn output_files(
+    dir: &Path,
+    scene: &Scene,
+    run: &MethodRun,
+    reference: &Field,
+) -> anyhow::Result<Vec<(PathBuf, Vec<u8>)>> {
     let style = FieldStyle::Tonemapped {
         exposure: scene.desc.render.exposure,
     };
     let title = format!("{:?}: {} records", run.method, run.records);
     let png = dir.join("field.png");
-    wrote(
-        &png,
-        write_png(&png, &field_figure(&run.field, Some(scene), &style, Some(&title))),
-    )?;
     let exr = dir.join("field.exr");
-    wrote(&exr, write_exr(&exr, &run.field))?;
-    super::caches_figures::write_cache_figures(dir, scene, run, reference)
+    let mut files = vec![
+        (
+            png.clone(),
+            png_bytes(&png, &field_figure(&run.field, Some(scene), &style, Some(&title)))?,
+        ),
+        (exr.clone(), exr_bytes(&exr, &run.field)?),
+    ];
+    files.extend(super::caches_figures::cache_figures(dir, scene, run, reference)?);
+    Ok(files)
 }

@@ -4,9 +4,12 @@ use anyhow::Context;
 use glam::DVec2;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::sync::{Arc, Mutex, Once};
 use std::time::Duration;
 use volcache::flatland::scene::Scene;
+use volcache::limits;
+use volcache::output::{OutputPlan, SetError, write_set};
 use volcache::progress::Progress;
 
 /// Load a scene file, or the embedded default scene when none is given.
@@ -29,30 +32,98 @@ pub fn scene_stem(path: Option<&Path>) -> String {
     )
 }
 
-/// Parse `WxH`.
+/// Parse `WxH` (within `limits::MAX_SIDE` per side and `limits::MAX_PIXELS`).
 pub fn parse_res(s: &str) -> Result<[u32; 2], String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
     let p = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("`{v}` in `{s}`: {e}"));
     let (w, h) = (p(w)?, p(h)?);
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("resolution must be between 1 and 16384 per side, got {w}x{h}"));
+    match limits::resolution_problem(w, h) {
+        Some(why) => Err(format!("resolution {why}")),
+        None => Ok([w, h]),
     }
-    Ok([w, h])
 }
 
-/// Parse `X,Y` as a finite point.
+/// Parse `X,Y` as a point within ±`limits::MAX_COORD`.
 pub fn parse_point(s: &str) -> Result<DVec2, String> {
     let (x, y) = s.split_once(',').ok_or_else(|| format!("expected X,Y, got `{s}`"))?;
     let p = |v: &str| {
-        v.trim()
+        let c = v
+            .trim()
             .parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| format!("`{v}` in `{s}` is not a finite number"))
+            .ok_or_else(|| format!("`{v}` in `{s}` is not a finite number"))?;
+        if c.abs() > limits::MAX_COORD {
+            return Err(format!("`{v}` in `{s}` lies beyond ±{:e}", limits::MAX_COORD));
+        }
+        Ok(c)
     };
     Ok(DVec2::new(p(x)?, p(y)?))
+}
+
+/// A count option within `1..=max`.
+pub fn check_count(flag: &str, v: u64, max: u64) -> anyhow::Result<()> {
+    anyhow::ensure!(v >= 1, "{flag} must be at least 1");
+    anyhow::ensure!(v <= max, "{flag} must be at most {max}, got {v}");
+    Ok(())
+}
+
+/// Samples per pixel (or per point) within `1..=max`.
+pub fn check_spp(flag: &str, v: u32, max: u32) -> anyhow::Result<()> {
+    check_count(flag, v as u64, max as u64)
+}
+
+/// A real option within `[lo, hi]` (and finite).
+pub fn check_range(flag: &str, v: f64, (lo, hi): (f64, f64)) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        v.is_finite() && (lo..=hi).contains(&v),
+        "{flag} must lie between {lo:e} and {hi:e}, got {v}"
+    );
+    Ok(())
+}
+
+/// An angle in degrees within ±`limits::MAX_ANGLE_DEG`.
+pub fn check_angle(flag: &str, v: f64) -> anyhow::Result<()> {
+    check_range(flag, v, (-limits::MAX_ANGLE_DEG, limits::MAX_ANGLE_DEG))
+}
+
+/// An exposure in stops within ±`limits::MAX_EXPOSURE`.
+pub fn check_exposure(v: f64) -> anyhow::Result<()> {
+    check_range("--exposure", v, (-limits::MAX_EXPOSURE, limits::MAX_EXPOSURE))
+}
+
+/// Peak bytes per pixel of a command, measured (`/usr/bin/time -f %M` at 1024² and
+/// 2048² and their difference) with a margin of 2×: values, validity, standard
+/// errors and per-row results, the figure, the encoded PNG and EXR.
+pub const FIELD_BYTES_PER_PIXEL: usize = 200;
+/// `caches`: the reference and the reconstruction, record lists, error map, figures.
+pub const CACHES_BYTES_PER_PIXEL: usize = 400;
+/// `render3d`: image and medium part, per-pixel statistics, query points' records.
+pub const RENDER3D_BYTES_PER_PIXEL: usize = 400;
+
+/// Refuse an image whose memory (at `bytes_per_pixel`) exceeds what the machine
+/// has available, before any work is done (rather than aborting half-way).
+pub fn ensure_memory(pixels: usize, bytes_per_pixel: usize, what: &str) -> anyhow::Result<()> {
+    let need = pixels as u64 * bytes_per_pixel as u64;
+    if let Some(avail) = available_memory() {
+        anyhow::ensure!(
+            need <= avail,
+            "{what} of {pixels} pixels needs about {:.1} GB of memory; {:.1} GB are available",
+            need as f64 / 1e9,
+            avail as f64 / 1e9
+        );
+    }
+    Ok(())
+}
+
+/// `MemAvailable` of /proc/meminfo, in bytes (None where there is none).
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// A progress handle cancelled by Ctrl-C, and a bar that follows it until dropped.
@@ -144,4 +215,53 @@ pub fn wrote(path: &Path, r: anyhow::Result<()>) -> anyhow::Result<()> {
     r.with_context(|| format!("writing {}", path.display()))?;
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// Exit code of a run stopped by Ctrl-C (128 + SIGINT), as shells report it.
+pub const INTERRUPTED: u8 = 130;
+
+/// Refuse, before any work is done, outputs that would overwrite an input of the
+/// run or each other.
+pub fn check_plan(plan: &OutputPlan) -> anyhow::Result<()> {
+    plan.check().map_err(anyhow::Error::from)
+}
+
+/// Write the outputs of a run as a set (`output::write_set`: every file renamed
+/// into place after all are written, the JSON summary last, naming the files and
+/// their hashes), print them, and give the exit code: 130 when Ctrl-C came (before
+/// the renames nothing is replaced; after, the outputs are complete and kept).
+pub fn write_outputs(
+    files: Vec<(PathBuf, Vec<u8>)>,
+    summary: Option<(&Path, serde_json::Value)>,
+    progress: &Progress,
+) -> anyhow::Result<ExitCode> {
+    let summary_path = summary.as_ref().map(|(p, _)| p.to_path_buf());
+    match write_set(&files, summary, &|| progress.is_cancelled()) {
+        Ok(_) => {}
+        Err(SetError::Interrupted) => {
+            eprintln!("cancelled: no output written (existing files left untouched)");
+            return Ok(ExitCode::from(INTERRUPTED));
+        }
+        Err(e) => return Err(anyhow::Error::from(e).context("writing the outputs")),
+    }
+    for p in files.iter().map(|(p, _)| p).chain(summary_path.as_ref()) {
+        eprintln!("wrote {}", p.display());
+    }
+    if progress.is_cancelled() {
+        eprintln!("interrupted while the outputs were being renamed into place: they are complete");
+        return Ok(ExitCode::from(INTERRUPTED));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// PNG bytes of a pixmap.
+pub fn png_bytes(path: &Path, pixmap: &tiny_skia::Pixmap) -> anyhow::Result<Vec<u8>> {
+    pixmap
+        .encode_png()
+        .map_err(|e| anyhow::anyhow!("{}: cannot encode the PNG: {e}", path.display()))
+}
+
+/// EXR bytes of a field.
+pub fn exr_bytes(path: &Path, field: &volcache::flatland::field::Field) -> anyhow::Result<Vec<u8>> {
+    volcache::output::encode_exr(field).with_context(|| format!("{}", path.display()))
 }

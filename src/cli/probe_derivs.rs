@@ -84,8 +84,8 @@ pub fn compute(
         Method::Reference => derivatives::reference(scene, x, omega_o, rs, &ps.settings, seed),
         Method::Aware | Method::Unaware => {
             let start = std::time::Instant::now();
-            let lf =
-                capture(scene, x, omega_o, ps, seed, 0, &Progress::new()).map_err(|_| anyhow::anyhow!("cancelled"))?;
+            let lf = capture(scene, x, omega_o, ps, seed, 0, &Progress::new())
+                .map_err(|_| anyhow::Error::from(volcache::progress::Cancelled))?;
             let (parts, aware) = if method == Method::Aware {
                 (derivatives::aware(&lf, &proxy::build(&lf, aw.rule), aw), true)
             } else {

@@ -35,17 +35,23 @@ pub fn reference_key(scene: &Scene, fp: &FieldParams) -> String {
     format!("{:016x}", fnv1a(text.as_bytes()))
 }
 
+/// The files (EXR, JSON) holding the reference for `fp` in `dir`.
+pub fn reference_files(scene: &Scene, fp: &FieldParams, dir: &Path) -> (PathBuf, PathBuf) {
+    let key = reference_key(scene, fp);
+    (dir.join(format!("{key}.exr")), dir.join(format!("{key}.json")))
+}
+
 /// The reference field for `fp` (its spp is the reference's), from `dir` when it
-/// is there, otherwise rendered (with a progress bar) and stored.
+/// is there, otherwise rendered (with a progress bar) and stored. Its values are
+/// f32-rounded either way (the precision of the stored EXR).
 pub fn reference_field(
     scene: &Scene,
     fp: &FieldParams,
     dir: &Path,
     quiet: bool,
 ) -> anyhow::Result<(Field, ReferenceInfo)> {
+    let (exr, json) = reference_files(scene, fp, dir);
     let key = reference_key(scene, fp);
-    let exr: PathBuf = dir.join(format!("{key}.exr"));
-    let json = dir.join(format!("{key}.json"));
     if let (Ok((w, h, px)), Ok(text)) = (read_exr(&exr), std::fs::read_to_string(&json))
         && (w, h) == (fp.width, fp.height)
         && let Ok(mut info) = serde_json::from_str::<ReferenceInfo>(&text)
@@ -65,7 +71,12 @@ pub fn reference_field(
     );
     let r = render_field(scene, fp, &ui.progress);
     ui.finish();
-    let r = r.map_err(|_| anyhow::anyhow!("cancelled"))?;
+    let mut r = r.map_err(|_| anyhow::Error::from(volcache::progress::Cancelled))?;
+    // The EXR stores f32: measure errors against exactly what a later run reads
+    // back, so that RMSEs do not change once the reference comes from disk.
+    for v in &mut r.field.values {
+        *v = v.as_vec3().as_dvec3();
+    }
     let n = r.std_error.len().max(1) as f64;
     let info = ReferenceInfo {
         key: key.clone(),

@@ -1,13 +1,15 @@
 //! Semantic validation of a parsed scene: every problem names its JSON path. The
-//! ranges are [`crate::limits`]; the scene's size ℓ is the domain's diagonal, and
-//! every point lies within the world disc (`Scene::WORLD_RADIUS` sizes around the
-//! domain's centre), beyond which nothing is ever seen.
+//! ranges are [`crate::limits`]; the scene's size ℓ is the domain's diagonal. Every
+//! point lies within `MAX_SIZES_FROM_ORIGIN`·ℓ of the origin, and every segment
+//! reaches into the world disc (`Scene::WORLD_RADIUS` sizes around the domain's
+//! centre): beyond it nothing is ever seen, so a segment entirely outside would
+//! silently vanish.
 
 use super::scene_desc::*;
 
 use crate::limits;
-use crate::scene_check::{Checker, Extent, distance};
 pub use crate::scene_check::Problem;
+use crate::scene_check::{Checker, Extent, distance};
 
 /// The domain's centre and size, once the domain itself is valid.
 #[derive(Clone, Copy)]
@@ -17,19 +19,51 @@ struct Frame {
 }
 
 impl Frame {
-    /// Every point of the scene must lie in the world disc: farther, rays never
-    /// reach it (an emitter there would silently vanish).
+    /// Within `MAX_SIZES_FROM_ORIGIN` scene sizes of the origin (f64 resolves the
+    /// scene's details there).
     fn near(&self, c: &mut Checker, path: &str, p: [f64; 2]) {
-        let r = super::scene::Scene::WORLD_RADIUS * self.size;
-        if distance(p, self.centre) > r {
+        let reach = p[0].abs().max(p[1].abs());
+        let max = limits::MAX_SIZES_FROM_ORIGIN * self.size;
+        if reach > max {
             c.fail(
                 path,
                 format!(
-                    "({:e}, {:e}) lies outside the world disc ({r:e} around the domain's centre), where nothing is seen",
-                    p[0], p[1]
+                    "({:e}, {:e}) lies more than {:e} scene sizes ({max:e}) from the origin",
+                    p[0],
+                    p[1],
+                    limits::MAX_SIZES_FROM_ORIGIN
                 ),
             );
         }
+    }
+
+    /// The segment a–b reaches into the world disc.
+    fn reaches(&self, c: &mut Checker, path: &str, a: [f64; 2], b: [f64; 2]) {
+        let r = super::scene::Scene::WORLD_RADIUS * self.size;
+        let (ab, ac) = (
+            [b[0] - a[0], b[1] - a[1]],
+            [self.centre[0] - a[0], self.centre[1] - a[1]],
+        );
+        let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+        let t = ((ac[0] * ab[0] + ac[1] * ab[1]) / len2).clamp(0.0, 1.0);
+        let closest = [a[0] + t * ab[0], a[1] + t * ab[1]];
+        if distance(closest, self.centre) > r {
+            c.fail(
+                path,
+                format!(
+                    "lies entirely outside the world disc ({r:e} around the domain's centre), where nothing is seen"
+                ),
+            );
+        }
+    }
+}
+
+/// Report `p` when it lies outside the domain (with a tiny tolerance).
+fn inside(c: &mut Checker, path: &str, p: [f64; 2], dom: &RectDesc, what: &str) {
+    let tol = 1e-9 * ((dom.max[0] - dom.min[0]) + (dom.max[1] - dom.min[1]));
+    let ok = (0..2).all(|k| p[k] >= dom.min[k] - tol && p[k] <= dom.max[k] + tol);
+    if !ok {
+        c.fail(path, format!("{what} at ({}, {}) is outside the domain", p[0], p[1]));
     }
 }
 
@@ -42,12 +76,13 @@ fn place(c: &mut Checker, frame: Option<Frame>, path: &str, p: [f64; 2]) -> bool
     ok
 }
 
-/// Report `p` when it lies outside the domain (with a tiny tolerance).
-fn inside(c: &mut Checker, path: &str, p: [f64; 2], dom: &RectDesc, what: &str) {
-    let tol = 1e-9 * ((dom.max[0] - dom.min[0]) + (dom.max[1] - dom.min[1]));
-    let ok = (0..2).all(|k| p[k] >= dom.min[k] - tol && p[k] <= dom.max[k] + tol);
-    if !ok {
-        c.fail(path, format!("{what} at ({}, {}) is outside the domain", p[0], p[1]));
+/// A segment's ends (already placed) are apart, and it reaches into the world.
+fn piece(c: &mut Checker, frame: Option<Frame>, path: &str, a: [f64; 2], b: [f64; 2], what: &str) {
+    let size = frame.map_or(0.0, |f| f.size);
+    if c.apart(path, a, b, size, what)
+        && let Some(f) = frame
+    {
+        f.reaches(c, path, a, b);
     }
 }
 
@@ -147,7 +182,11 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
     }
     let r = &d.render;
     c.render_block(r.resolution, r.spp, r.max_depth, r.exposure);
-    c.within("render.omega_o_deg", r.omega_o_deg, (-limits::MAX_ANGLE_DEG, limits::MAX_ANGLE_DEG));
+    c.within(
+        "render.omega_o_deg",
+        r.omega_o_deg,
+        (-limits::MAX_ANGLE_DEG, limits::MAX_ANGLE_DEG),
+    );
     c.problems
 }
 
@@ -156,7 +195,14 @@ fn validate_segment(c: &mut Checker, frame: Option<Frame>, path: &str, s: &Segme
     match (&s.a, &s.b, &s.points) {
         (Some(a), Some(b), None) => {
             if place(c, frame, &format!("{path}.a"), *a) & place(c, frame, &format!("{path}.b"), *b) {
-                c.apart(&format!("{path}.b"), *a, *b, size, "zero-length segment: a and b coincide");
+                piece(
+                    c,
+                    frame,
+                    &format!("{path}.b"),
+                    *a,
+                    *b,
+                    "zero-length segment: a and b coincide",
+                );
             }
         }
         (None, None, Some(pts)) => {
@@ -171,7 +217,14 @@ fn validate_segment(c: &mut Checker, frame: Option<Frame>, path: &str, s: &Segme
                 let pp = format!("{path}.points[{k}]");
                 let ok = place(c, frame, &pp, *p);
                 if ok && k > 0 && pts[k - 1].iter().all(|v| v.is_finite()) {
-                    c.apart(&pp, pts[k - 1], *p, size, "zero-length segment: repeats the previous point");
+                    piece(
+                        c,
+                        frame,
+                        &pp,
+                        pts[k - 1],
+                        *p,
+                        "zero-length segment: repeats the previous point",
+                    );
                 }
                 all &= ok;
             }

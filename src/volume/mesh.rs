@@ -160,7 +160,13 @@ pub fn load_obj(path: &Path, scale: DVec3, translate: DVec3, shape: u32) -> Resu
 
 /// [`load_obj`] on the bytes of an OBJ file named `file` (materials are not read:
 /// surfaces come from the scene).
-pub fn parse_obj(bytes: &[u8], file: &str, scale: DVec3, translate: DVec3, shape: u32) -> Result<Vec<Triangle>, String> {
+pub fn parse_obj(
+    bytes: &[u8],
+    file: &str,
+    scale: DVec3,
+    translate: DVec3,
+    shape: u32,
+) -> Result<Vec<Triangle>, String> {
     check_vertices(file, &String::from_utf8_lossy(bytes), scale, translate)?;
     let opts = tobj::LoadOptions {
         triangulate: true,

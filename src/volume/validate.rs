@@ -6,8 +6,8 @@
 
 use super::scene_desc::*;
 use crate::limits;
-use crate::scene_check::{Checker, Extent, length};
 pub use crate::scene_check::Problem;
+use crate::scene_check::{Checker, Extent, length};
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
@@ -73,7 +73,14 @@ pub fn validate(d: &SceneDesc) -> Vec<Problem> {
     } else {
         0.0
     };
-    let aimed = placed && c.apart("camera.look_at", cam.position, cam.look_at, size, "must differ from camera.position");
+    let aimed = placed
+        && c.apart(
+            "camera.look_at",
+            cam.position,
+            cam.look_at,
+            size,
+            "must differ from camera.position",
+        );
     if c.direction("camera.up", cam.up) && aimed {
         let view = unit([0, 1, 2].map(|k| cam.look_at[k] - cam.position[k]));
         // sin of the angle between them: the camera's frame is their cross product.
