@@ -130,9 +130,12 @@ fn compute_record(
     omega_o: DVec2,
     cs: &CacheSettings,
     pixel: usize,
+    progress: &Progress,
 ) -> Result<RecordData, Cancelled> {
     let seed = mix64(cs.seed ^ mix64(pixel as u64));
-    let lf = capture(scene, x, omega_o, &cs.probe, seed, 0, &Progress::new())?;
+    // The caller's progress: a cancel stops a capture between its rays (one record
+    // can take minutes with deep paths in a dense, forward-scattering medium).
+    let lf = capture(scene, x, omega_o, &cs.probe, seed, 0, progress)?;
     let (parts, metric_hessians) = match cs.method {
         CacheMethod::Ours => {
             let elements = proxy::build(&lf, cs.aware.rule);
@@ -235,7 +238,9 @@ pub fn render_cached(
         }
         let d = match memo.entry(k) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-            std::collections::hash_map::Entry::Vacant(e) => e.insert(compute_record(scene, x, omega_o, cs, k)?),
+            std::collections::hash_map::Entry::Vacant(e) => {
+                e.insert(compute_record(scene, x, omega_o, cs, k, progress)?)
+            }
         };
         placement_rays += d.rays;
         for c in uncovered {
