@@ -17,6 +17,15 @@ pub struct Checker {
     pub problems: Vec<Problem>,
 }
 
+/// A number as messages show it: plain when short, else in scientific notation.
+pub fn shown(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// Euclidean length, computed without overflow or underflow for finite input.
 pub fn length<const N: usize>(v: [f64; N]) -> f64 {
     let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -212,9 +221,12 @@ impl Checker {
             if v < 0.0 {
                 self.fail(p, format!("must not be negative, got {v}"));
             } else if v > hi {
-                self.fail(p, format!("must be at most {hi}, got {v}"));
+                self.fail(p, format!("must be at most {}, got {}", shown(hi), shown(v)));
             } else if !zero_or_within(v, range) {
-                self.fail(p, format!("{what} must be 0 or at least {lo:e}, got {v:e}"));
+                self.fail(
+                    p,
+                    format!("{what} must be 0 or at least {}, got {}", shown(lo), shown(v)),
+                );
             }
         }
     }
