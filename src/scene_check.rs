@@ -67,9 +67,9 @@ impl<const N: usize> Extent<N> {
             if p.iter().fold(0.0f64, |m, v| m.max(v.abs())) > self.reach() || self.farthest.is_empty() {
                 self.farthest = path.to_string();
             }
-            for k in 0..N {
-                self.min[k] = self.min[k].min(p[k]);
-                self.max[k] = self.max[k].max(p[k]);
+            for (k, &x) in p.iter().enumerate() {
+                self.min[k] = self.min[k].min(x);
+                self.max[k] = self.max[k].max(x);
             }
         }
     }

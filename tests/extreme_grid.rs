@@ -245,7 +245,7 @@ fn flatland_methods_stay_finite_over_the_grid() {
             let ps = ProbeSettings {
                 rays: 32,
                 steps: 3,
-                settings: fp.settings.clone(),
+                settings: fp.settings,
                 ..Default::default()
             };
             let lf = capture(&scene, x, DVec2::X, &ps, 1, 0, &Progress::new()).unwrap();
@@ -317,7 +317,7 @@ fn flatland_option_extremes_stay_finite() {
             let ps = ProbeSettings {
                 rays: 48,
                 steps: 4,
-                settings: fp.settings.clone(),
+                settings: fp.settings,
                 ..Default::default()
             };
             let lf = capture(&scene, x, DVec2::X, &ps, 1, 0, &Progress::new()).unwrap();
@@ -450,7 +450,7 @@ fn every_method_stops_promptly_when_cancelled() {
     }
     let ps = ProbeSettings {
         rays: 1 << 16,
-        settings: fp.settings.clone(),
+        settings: fp.settings,
         ..Default::default()
     };
     stops_promptly("probe capture", |pr| {

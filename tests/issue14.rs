@@ -69,7 +69,7 @@ const FOG3: &str = r#"{"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "
   "medium": {"sigma_a": 0.1, "sigma_s": 0.5, "g": 0.3,
              "region": {"box": {"min": [-1.5, -1.5, -1.5], "max": [1.5, 1.5, 1.5]}}}}"#;
 
-/// 1. `caches` on a domain 10⁻³⁰⁷ wide looped for ever drawing its records: the
+/// Item 1: `caches` on a domain 10⁻³⁰⁷ wide looped for ever drawing its records: the
 /// domain is refused (at least 10⁻⁶ across), in well under a second.
 #[test]
 fn item01_a_vanishing_domain_is_refused_not_drawn_for_ever() {
@@ -105,7 +105,7 @@ fn item01_a_vanishing_domain_is_refused_not_drawn_for_ever() {
     );
 }
 
-/// 2. σ_s = 10⁸, g = 0.999 with max_depth 2³²−1 never finished: max_depth is
+/// Item 2: σ_s = 10⁸, g = 0.999 with max_depth 2³²−1 never finished: max_depth is
 /// bounded (10⁵), and at the bound the same scene renders in seconds.
 #[test]
 fn item02_unbounded_path_depth_is_refused() {
@@ -134,7 +134,7 @@ fn item02_unbounded_path_depth_is_refused() {
     run_within(&mut field(&s), Duration::from_secs(60));
 }
 
-/// 3. `field --false-color` with σ_s = 5·10⁻³²⁴ asked for 5.4 GB for colour-bar
+/// Item 3: `field --false-color` with σ_s = 5·10⁻³²⁴ asked for 5.4 GB for colour-bar
 /// ticks: subnormal coefficients are refused (and the colour bar copes anyway:
 /// `figure::colorbar` tests).
 #[test]
@@ -159,7 +159,7 @@ fn item03_subnormal_coefficients_are_refused() {
     );
 }
 
-/// 4. `--res 16384x16384` was accepted and aborted allocating 6.4 GB: sizes beyond
+/// Item 4: `--res 16384x16384` was accepted and aborted allocating 6.4 GB: sizes beyond
 /// what fits are refused up front, by every command.
 #[test]
 fn item04_images_that_cannot_fit_are_refused_up_front() {
@@ -184,7 +184,7 @@ fn item04_images_that_cannot_fit_are_refused_up_front() {
     assert!(!out.exists());
 }
 
-/// 5. Radiance above the f32 range became inf in the EXR: emission 10³⁹ is refused
+/// Item 5: Radiance above the f32 range became inf in the EXR: emission 10³⁹ is refused
 /// (at most 10²⁰), and so are records whose values leave the f32 range.
 #[test]
 fn item05_radiance_beyond_f32_is_refused() {
@@ -233,7 +233,7 @@ fn item05_radiance_beyond_f32_is_refused() {
     );
 }
 
-/// 6. Emission 10³⁰⁸ gave NaN near a corner, 5·10⁻³²⁴ NaN in 2D and 3D: both are
+/// Item 6: Emission 10³⁰⁸ gave NaN near a corner, 5·10⁻³²⁴ NaN in 2D and 3D: both are
 /// outside the radiometric range.
 #[test]
 fn item06_extreme_emissions_are_refused() {
@@ -259,7 +259,7 @@ fn item06_extreme_emissions_are_refused() {
     }
 }
 
-/// 7. A scene without a medium wrote `luminance_min/max: null`: no pixel is valid,
+/// Item 7: A scene without a medium wrote `luminance_min/max: null`: no pixel is valid,
 /// the summary says so and its statistics are 0.
 #[test]
 fn item07_no_medium_summary_has_numbers() {
@@ -286,7 +286,7 @@ fn item07_no_medium_summary_has_numbers() {
     }
 }
 
-/// 8. An all-zero reference gave relMSE 6.5·10³⁰³ up to inf: the floor falls back
+/// Item 8: An all-zero reference gave relMSE 6.5·10³⁰³ up to inf: the floor falls back
 /// to the image's own mean (unit test in `core::stats`), so relMSE is bounded by
 /// 100 × pixels.
 #[test]
@@ -310,7 +310,7 @@ fn item08_all_zero_reference_gives_a_finite_relmse() {
     assert!(relmse > 0.0 && relmse <= 100.0 * 12.0, "{relmse}");
 }
 
-/// 9. `--fd-step 1e-300` gave a NaN Hessian, `--medium-clamp 1e308` NaN
+/// Item 9: `--fd-step 1e-300` gave a NaN Hessian, `--medium-clamp 1e308` NaN
 /// derivatives, `caches --eps nan|inf` was accepted: all are out of range.
 #[test]
 fn item09_options_outside_their_ranges_are_refused() {
@@ -345,7 +345,7 @@ fn item09_options_outside_their_ranges_are_refused() {
     assert!(!d.path().join("o").exists());
 }
 
-/// 10. Probe points at 10³⁰⁸, segments at ±10¹⁵⁴ (NaN; beyond 10¹⁵⁵ the emitter
+/// Item 10: Probe points at 10³⁰⁸, segments at ±10¹⁵⁴ (NaN; beyond 10¹⁵⁵ the emitter
 /// vanished), a camera at 10³⁰⁰, a sun direction of length 10⁻²⁰⁰ and σ_s = 10³⁰⁰
 /// with g = 1 − 10⁻¹⁶: each is refused naming its field.
 #[test]
@@ -396,7 +396,7 @@ fn item10_out_of_range_geometry_is_refused() {
     }
 }
 
-/// 11. An output path equal to the input destroyed it, and the same path for
+/// Item 11: An output path equal to the input destroyed it, and the same path for
 /// --out, --exr and --json kept only the last: both are refused before any work,
 /// and the input is intact.
 #[test]
@@ -451,7 +451,7 @@ fn item11_outputs_never_overwrite_inputs_or_each_other() {
     assert_eq!(std::fs::read_to_string(d.path().join("c/summary.json")).unwrap(), FOG);
 }
 
-/// 12. A run killed between writing and renaming left `.f.png.<pid>-0.tmp` that no
+/// Item 12: A run killed between writing and renaming left `.f.png.<pid>-0.tmp` that no
 /// later run removed, and the files of one run were replaced one at a time: stale
 /// temporary files of our naming are removed, and the JSON summary, written last,
 /// names every file of the set with its hash (so a reader can tell a mixed set).
@@ -506,7 +506,7 @@ fn item12_outputs_are_written_as_a_set_and_strays_are_cleaned() {
     assert!(!png.matches(&out.join("f.png")), "a mixed set looked whole");
 }
 
-/// 13. `caches` exited 2 ("error: cancelled") on Ctrl-C where `field` and
+/// Item 13: `caches` exited 2 ("error: cancelled") on Ctrl-C where `field` and
 /// `render3d` exit 130: Ctrl-C while its reference renders exits 130 and writes
 /// nothing.
 #[cfg(unix)]
@@ -544,7 +544,7 @@ fn item13_caches_exits_130_on_ctrl_c() {
     assert!(!d.path().join("o").exists() && !d.path().join("ref").exists());
 }
 
-/// 14. An OBJ vertex `v nan 0 0` silently dropped its triangles: an error naming
+/// Item 14: An OBJ vertex `v nan 0 0` silently dropped its triangles: an error naming
 /// the file and the line.
 #[test]
 fn item14_a_bad_obj_vertex_names_its_file_and_line() {
@@ -566,7 +566,7 @@ fn item14_a_bad_obj_vertex_names_its_file_and_line() {
     );
 }
 
-/// 15. σ_s = 10⁵, g ≈ 1 at 4×3 pixels placed 885 records for 888 query points
+/// Item 15: σ_s = 10⁵, g ≈ 1 at 4×3 pixels placed 885 records for 888 query points
 /// where the camera's transmittance had underflowed to 0: such points are not
 /// visited, so placement makes at most a handful.
 #[test]
@@ -604,7 +604,7 @@ fn item15_points_the_camera_cannot_see_get_no_records() {
     assert!(img.values.iter().all(|v| v.is_finite()));
 }
 
-/// 16. `caches` gave other RMSEs on a re-run, once its reference came from the
+/// Item 16: `caches` gave other RMSEs on a re-run, once its reference came from the
 /// on-disk cache (f32): both runs measure against the f32-rounded reference.
 #[test]
 fn item16_rerun_with_the_cached_reference_gives_the_same_errors() {

@@ -3,7 +3,7 @@
 //! placement re-run from scratch so its time is honest) and path tracing over
 //! samples per pixel; error against one reference field (cached on disk).
 
-use super::caches::{CacheArgs, MethodArg, MethodRun, field_params, run_method};
+use super::caches::{CacheArgs, MethodArg, MethodRun, check_cache_args, field_params, run_method};
 use super::common::{load_scene, scene_stem, wrote};
 use super::reference::{ReferenceInfo, reference_field};
 use clap::Args;
@@ -56,6 +56,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
+    check_cache_args(&a.cache, &fp)?;
     let ref_fp = FieldParams {
         spp: a.cache.ref_spp,
         seed: a.cache.seed ^ 0x5EED,

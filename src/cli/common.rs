@@ -106,7 +106,7 @@ pub const RENDER3D_BYTES_PER_PIXEL: usize = 400;
 /// Refuse an image whose memory (at `bytes_per_pixel`) exceeds what the machine
 /// has available, before any work is done (rather than aborting half-way).
 pub fn ensure_memory(pixels: usize, bytes_per_pixel: usize, what: &str) -> anyhow::Result<()> {
-    let need = pixels as u64 * bytes_per_pixel as u64;
+    let need = (pixels as u64).saturating_mul(bytes_per_pixel as u64);
     if let Some(avail) = available_memory() {
         anyhow::ensure!(
             need <= avail,
@@ -264,4 +264,52 @@ pub fn png_bytes(path: &Path, pixmap: &tiny_skia::Pixmap) -> anyhow::Result<Vec<
 /// EXR bytes of a field.
 pub fn exr_bytes(path: &Path, field: &volcache::flatland::field::Field) -> anyhow::Result<Vec<u8>> {
     volcache::output::encode_exr(field).with_context(|| format!("{}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ctrl-C during the write phase (issue 14: it was ignored and the run exited
+    /// 0): before the renames nothing is replaced and the exit code is 130.
+    #[test]
+    fn ctrl_c_while_writing_exits_130_and_replaces_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("f.png");
+        std::fs::write(&png, b"old").unwrap();
+        let progress = Progress::new();
+        progress.cancel();
+        let json = dir.path().join("f.json");
+        let code = write_outputs(
+            vec![(png.clone(), b"new".to_vec())],
+            Some((&json, serde_json::json!({}))),
+            &progress,
+        )
+        .unwrap();
+        assert_eq!(code, ExitCode::from(INTERRUPTED));
+        assert_eq!(std::fs::read(&png).unwrap(), b"old");
+        assert!(!json.exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // Not cancelled: written, summary last, exit 0.
+        let code = write_outputs(
+            vec![(png.clone(), b"new".to_vec())],
+            Some((&json, serde_json::json!({}))),
+            &Progress::new(),
+        )
+        .unwrap();
+        assert_eq!(code, ExitCode::SUCCESS);
+        assert_eq!(std::fs::read(&png).unwrap(), b"new");
+    }
+
+    #[test]
+    fn option_ranges() {
+        assert!(parse_res("4096x4096").is_ok());
+        assert!(parse_res("16384x16384").unwrap_err().contains("pixels"));
+        assert!(parse_point("1e12,-1e12").is_ok());
+        assert!(parse_point("1e308,0").is_err() && parse_point("nan,0").is_err());
+        assert!(check_range("--x", f64::NAN, (0.0, 1.0)).is_err());
+        assert!(check_exposure(100.0).is_ok() && check_exposure(100.5).is_err());
+        assert!(ensure_memory(1, 1, "x").is_ok());
+        assert!(ensure_memory(usize::MAX / 1024, 1024, "x").is_err());
+    }
 }

@@ -2,7 +2,7 @@
 //! reference, ours and Jarosz 2008 side by side with their cache distributions,
 //! error maps (shared range) and the numbers in the captions.
 
-use super::caches::{CacheArgs, MethodArg, MethodRun, field_params, run_method};
+use super::caches::{CacheArgs, MethodArg, MethodRun, check_cache_args, field_params, run_method};
 use super::caches_figures::all_records;
 use super::common::{ProgressUi, load_scene, scene_stem, wrote};
 use super::reference::reference_field;
@@ -57,6 +57,7 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
         cache.caches = Some(200);
     }
     let fp = field_params(&scene, &cache);
+    check_cache_args(&cache, &fp)?;
     let ref_fp = FieldParams {
         spp: cache.ref_spp,
         seed: cache.seed ^ 0x5EED,
