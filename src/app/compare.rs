@@ -154,7 +154,9 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
                 "compare: reference {}×{} @ {} spp",
                 rp.width, rp.height, rp.spp
             ));
-            let reference = render_field(&scene, &rp, r.progress())?;
+            let mut reference = render_field(&scene, &rp, r.progress())?;
+            // As `figure compare` measures (its reference is stored as f32).
+            crate::output::round_to_f32(&mut reference.field);
             r.add_rays(reference.rays);
             let mut res = CompareResult {
                 fp: fp.clone(),

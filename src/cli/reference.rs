@@ -74,9 +74,7 @@ pub fn reference_field(
     let mut r = r.map_err(|_| anyhow::Error::from(volcache::progress::Cancelled))?;
     // The EXR stores f32: measure errors against exactly what a later run reads
     // back, so that RMSEs do not change once the reference comes from disk.
-    for v in &mut r.field.values {
-        *v = v.as_vec3().as_dvec3();
-    }
+    volcache::output::round_to_f32(&mut r.field);
     let n = r.std_error.len().max(1) as f64;
     let info = ReferenceInfo {
         key: key.clone(),

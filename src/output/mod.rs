@@ -128,6 +128,14 @@ pub fn encode_exr(field: &Field) -> anyhow::Result<Vec<u8>> {
     Ok(cursor.into_inner())
 }
 
+/// Round every value of `field` to f32, the precision an EXR stores: a reference
+/// measured against in memory and one read back from disk give the same errors.
+pub fn round_to_f32(field: &mut Field) {
+    for v in &mut field.values {
+        *v = v.as_vec3().as_dvec3();
+    }
+}
+
 fn fits_f32(v: crate::core::color::Rgb) -> bool {
     v.to_array().iter().all(|c| c.is_finite() && c.abs() <= f32::MAX as f64)
 }
