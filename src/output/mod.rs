@@ -183,7 +183,8 @@ mod tests {
     use crate::core::color::Rgb;
     use glam::DVec2;
 
-    fn entries(dir: &Path) -> Vec<String> {
+    /// The names in a folder, sorted (the submodules' tests use it too).
+    pub(super) fn entries(dir: &Path) -> Vec<String> {
         let mut v: Vec<String> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

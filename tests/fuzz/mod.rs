@@ -6,7 +6,8 @@
 //!
 //! In CI (`cargo test`) the seed and case count are fixed; a long run sets
 //! `VOLCACHE_FUZZ_CASES` (and optionally `VOLCACHE_FUZZ_SEED`), e.g.
-//! `VOLCACHE_FUZZ_CASES=20000 cargo test --release --test fuzz_parsers -- --nocapture`.
+//! `VOLCACHE_FUZZ_CASES=20000 cargo test --test fuzz_parsers -- --nocapture` (the test
+//! profile is optimised).
 
 #![allow(dead_code)] // each test crate uses a part
 
