@@ -1,17 +1,21 @@
 //! Fuzzing the command line as a user would (issue 14): a mutated corpus scene and
 //! a random command — field, probe (every method), caches (every method), render3d
 //! (every method) — with options drawn from their valid values and their edges,
-//! and output paths that sometimes name the scene or each other. Every run must
-//! end (no hang) with 0, 2 (a clear error) or 130, never a crash; what it writes
-//! must be finite (no NaN/inf EXR pixel, no null number in a JSON summary); and it
-//! must be safe: the scene is unchanged, nothing is written outside the outputs it
-//! was given, and no temporary file is left behind.
+//! and output paths that sometimes name the scene or each other; one run in five
+//! gets a SIGINT, SIGKILL or SIGTERM at a random moment (computing or writing).
+//! Every run must end (no hang) with 0, 2 (a clear error) or 130, or by the kill we
+//! sent, never a crash; what it writes must be finite (no NaN/inf EXR pixel, no
+//! null number in a JSON summary); and it must be safe: the scene is unchanged,
+//! nothing is written outside the outputs it was given, every summary's listed
+//! outputs are the files beside it, and no temporary file is left behind (after a
+//! kill, the next run of the same command removes the killed one's).
 //!
 //! CI runs a few cases; `VOLCACHE_FUZZ_CASES=N` makes a long run (see `fuzz/mod.rs`).
 
 mod fuzz;
 
 use std::collections::BTreeSet;
+use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -161,6 +165,65 @@ fn command(s: &mut Sampler, three_d: bool) -> (Vec<String>, Vec<&'static str>) {
     (a, outputs)
 }
 
+/// Run `args` in `dir` (sending `signal` after its delay), within [`HANG`].
+fn run_once(dir: &Path, args: &[String], signal: Option<(i32, Duration)>) -> (std::process::Output, bool, Duration) {
+    let start = Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_volcache"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut sent = false;
+    let mut hung = false;
+    while child.try_wait().unwrap().is_none() {
+        if let Some((sig, after)) = signal
+            && !sent
+            && start.elapsed() >= after
+        {
+            // SAFETY: signalling our own child.
+            unsafe { libc::kill(child.id() as i32, sig) };
+            sent = true;
+        }
+        if start.elapsed() > HANG {
+            child.kill().unwrap();
+            hung = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    (child.wait_with_output().unwrap(), hung, start.elapsed())
+}
+
+/// Summaries whose listed outputs are not the files beside them (a mixed set).
+fn mixed_sets(dir: &Path, files: &BTreeSet<(PathBuf, u64)>) -> Vec<String> {
+    let mut bad = Vec::new();
+    for (p, _) in files.iter().filter(|(p, _)| p.extension().is_some_and(|e| e == "json")) {
+        let Ok(v) = serde_json::from_slice::<serde_json::Value>(&std::fs::read(dir.join(p)).unwrap_or_default()) else {
+            continue;
+        };
+        let Some(listed) = v.get("outputs").and_then(|o| o.as_array()) else {
+            continue;
+        };
+        let folder = dir.join(p).parent().unwrap().to_path_buf();
+        for f in listed {
+            let path = folder.join(f["path"].as_str().unwrap_or_default());
+            let bytes = std::fs::read(&path).unwrap_or_default();
+            let same =
+                f["bytes"] == bytes.len() && f["fnv1a64"] == format!("{:016x}", volcache::core::rng::fnv1a(&bytes));
+            if !same {
+                bad.push(format!(
+                    "{} lists {}, which is not the file beside it",
+                    p.display(),
+                    path.display()
+                ));
+            }
+        }
+    }
+    bad
+}
+
 /// Every file under `dir` (relative paths) with its bytes' hash.
 fn snapshot(dir: &Path) -> BTreeSet<(PathBuf, u64)> {
     let mut out = BTreeSet::new();
@@ -259,6 +322,7 @@ fn fuzz_the_command_line() {
     let (mut crashes, mut hangs, mut unfinite, mut unsafe_outputs, mut ok, mut refused, mut slowest) =
         (0, 0, 0, 0, 0, 0, Duration::ZERO);
     let mut examples = Vec::new();
+    let (mut signalled, mut kills) = (0, 0);
     let obj = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes3d/icosphere.obj")).unwrap();
     for k in 0..n {
         let mut s = Sampler::new2(seed, 1400, k as u64);
@@ -275,31 +339,41 @@ fn fuzz_the_command_line() {
         std::fs::write(dir.path().join("icosphere.obj"), &obj).unwrap();
         let (args, outputs) = command(&mut s, three_d);
         let before = snapshot(dir.path());
-        let start = Instant::now();
-        let mut child = Command::new(env!("CARGO_BIN_EXE_volcache"))
-            .args(&args)
-            .current_dir(dir.path())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut hung = false;
-        while child.try_wait().unwrap().is_none() {
-            if start.elapsed() > HANG {
-                child.kill().unwrap();
-                hung = true;
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(5));
+        // Sometimes a signal mid-run (or mid-write): Ctrl-C, a kill, a terminate.
+        let signal = match s.next_index(20) {
+            0 | 1 => Some(libc::SIGINT),
+            2 => Some(libc::SIGKILL),
+            3 => Some(libc::SIGTERM),
+            _ => None,
         }
-        let out = child.wait_with_output().unwrap();
-        slowest = slowest.max(start.elapsed());
-        let what = format!("case {k} (seed {seed}, {name}): volcache {}", args.join(" "));
+        .map(|sig| (sig, Duration::from_millis(s.next_index(400) as u64)));
+        let (mut out, hung, took) = run_once(dir.path(), &args, signal);
+        slowest = slowest.max(took);
+        let mut what = format!("case {k} (seed {seed}, {name}): volcache {}", args.join(" "));
+        let killed = out.status.signal().is_some() && signal.is_some_and(|(sig, _)| sig != libc::SIGINT);
+        signalled += signal.is_some() as usize;
+        kills += killed as usize;
+        if killed {
+            // A killed run may leave its temporary files: the next run into the same
+            // folders must remove them (and must itself be sound).
+            what = format!("{what} (killed, then run again)");
+            let (again, hung_again, took) = run_once(dir.path(), &args, None);
+            slowest = slowest.max(took);
+            if hung_again {
+                hangs += 1;
+            }
+            out = again;
+        }
         let after = snapshot(dir.path());
         let mut problems = Vec::new();
         if hung {
             hangs += 1;
             problems.push("hung".to_string());
+        }
+        let mixed = mixed_sets(dir.path(), &after);
+        if !mixed.is_empty() {
+            unsafe_outputs += 1;
+            problems.extend(mixed);
         }
         match out.status.code() {
             Some(0) => {
@@ -318,6 +392,8 @@ fn fuzz_the_command_line() {
                 }
             }
             _ if hung => {}
+            // The signal we sent ended it (SIGINT has a handler: it exits 130).
+            None if signal.is_some() && !killed => {}
             code => {
                 crashes += 1;
                 problems.push(format!("exit {code:?}: {}", String::from_utf8_lossy(&out.stderr)));
@@ -347,8 +423,9 @@ fn fuzz_the_command_line() {
         }
     }
     eprintln!(
-        "fuzz command line: {n} runs ({ok} succeeded, {refused} refused or interrupted), {crashes} crashes, \
-         {hangs} hangs, {unfinite} with non-finite outputs, {unsafe_outputs} with unsafe outputs; slowest {slowest:?}"
+        "fuzz command line: {n} runs ({ok} succeeded, {refused} refused or interrupted; {signalled} signalled, \
+         {kills} killed and run again), {crashes} crashes, {hangs} hangs, {unfinite} with non-finite outputs, \
+         {unsafe_outputs} with unsafe outputs; slowest {slowest:?}"
     );
     assert!(
         crashes + hangs + unfinite + unsafe_outputs == 0,

@@ -272,10 +272,16 @@ mod tests {
         let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n";
         assert_eq!(check(&format!("{quad}f 1//1 2//1 3//-1 -1//1\n")), Ok(()));
         for (text, want) in [
-            ("v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "`m.obj` line 2: vertex coordinate `nan`"),
+            (
+                "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+                "`m.obj` line 2: vertex coordinate `nan`",
+            ),
             ("v 0 1e39 0\n", "line 1: vertex coordinate `1e39` is not a finite"),
             ("v 0 1\n", "line 1: a vertex needs three coordinates"),
-            (&format!("{quad}f 1 2 5\n"), "line 6: face index `5` refers to no vertex"),
+            (
+                &format!("{quad}f 1 2 5\n"),
+                "line 6: face index `5` refers to no vertex",
+            ),
             (&format!("{quad}f 1 2 3//-9223372036854775808\n"), "refers to no normal"),
             (&format!("{quad}f 1/1 2 3\n"), "refers to no texture coordinate"),
             (&format!("{quad}f 0 1 2\n"), "face index `0`"),
