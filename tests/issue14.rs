@@ -182,6 +182,28 @@ fn item04_images_that_cannot_fit_are_refused_up_front() {
         assert!(err.contains("16384x16384") && err.contains("pixels"), "{args:?}: {err}");
     }
     assert!(!out.exists());
+    // What grows beyond the image — here 3D records as ε → 0, about 5 kB each — is
+    // watched too: past the memory limit the run stops with a clear error (the
+    // limit is set low here; by default it is 80% of the memory available).
+    let err = refused(
+        volcache()
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env("VOLCACHE_MEMORY_LIMIT_MB", "80")
+            .args([
+                "render3d",
+                "scenes3d/fog_box.json",
+                "--method",
+                "ours",
+                "--res",
+                "64x48",
+                "--spp",
+                "1",
+            ])
+            .args(["--rays", "4", "--steps", "1", "--eps", "1e-9", "--quiet", "--out"])
+            .arg(&out),
+    );
+    assert!(err.contains("outgrew the memory"), "{err}");
+    assert!(!out.exists());
 }
 
 /// Item 5: Radiance above the f32 range became inf in the EXR: emission 10³⁹ is refused

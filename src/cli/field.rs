@@ -1,7 +1,7 @@
 //! `volcache field`: render a scene's radiance field to PNG (+ EXR, JSON).
 
 use super::common::{
-    FIELD_BYTES_PER_PIXEL, INTERRUPTED, ProgressUi, check_angle, check_exposure, check_plan, check_spp, ensure_memory,
+    FIELD_BYTES_PER_PIXEL, ProgressUi, cancelled, check_angle, check_exposure, check_plan, check_spp, ensure_memory,
     exr_bytes, load_scene, out_path, parse_res, png_bytes, scene_stem, write_outputs,
 };
 use clap::{Args, ValueEnum};
@@ -153,8 +153,7 @@ pub fn run(a: FieldArgs) -> anyhow::Result<ExitCode> {
     let result = render_field(&scene, &params, &progress);
     ui.finish();
     let Ok(rendered) = result else {
-        eprintln!("cancelled: no output written (existing files left untouched)");
-        return Ok(ExitCode::from(INTERRUPTED));
+        return cancelled();
     };
 
     let style = if a.false_color {

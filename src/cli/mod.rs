@@ -23,6 +23,7 @@ mod render3d_cache;
 mod runs3d;
 
 use clap::{Parser, Subcommand};
+pub use common::cancelled;
 use std::process::ExitCode;
 
 #[derive(Parser, Debug)]

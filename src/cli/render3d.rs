@@ -7,7 +7,7 @@
 //! `--records-in`.
 
 use super::common::{
-    ProgressUi, RENDER3D_BYTES_PER_PIXEL, check_exposure, check_plan, check_spp, ensure_memory, parse_res,
+    ProgressUi, RENDER3D_BYTES_PER_PIXEL, cancelled, check_exposure, check_plan, check_spp, ensure_memory, parse_res,
 };
 use super::image3d::{
     CacheSummary, Summary3d, mean_luminance, medium_path, output_paths, parse_crop, parse_tile, reference_errors,
@@ -182,10 +182,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
     ui.finish();
     let (img, cache) = match result {
         Ok(r) => r,
-        Err(e) if e.is::<volcache::progress::Cancelled>() => {
-            eprintln!("cancelled: no output written (existing files left untouched)");
-            return Ok(ExitCode::from(130));
-        }
+        Err(e) if e.is::<volcache::progress::Cancelled>() => return cancelled(),
         Err(e) => return Err(e),
     };
     let Some(img) = img else {
