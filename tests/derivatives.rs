@@ -120,25 +120,25 @@ fn aware_beats_unaware_near_occlusion_boundaries() {
     assert!(h_med < 0.5, "aware median Hessian error {h_med}");
 }
 
-/// More directions, smaller error against the reference (single scattering in a
-/// penumbra, where the reference is precise).
+/// More directions, smaller error against the exact single scattering
+/// (`study::exact2d`) in and around the occluder's penumbra, with a black occluder
+/// so that single scattering is the emitter's light alone. Measured (4 seeds, 3
+/// points): mean relative gradient error 0.0112 at N = 128, 0.0002 at N = 4096.
+/// Before the exact silhouettes (`pipeline::silhouette`) the N = 128 error was
+/// dominated by the last hit's offset from the true edge (0.088 against a
+/// finite-difference reference; 0.027 with them).
 #[test]
 fn aware_error_shrinks_with_more_rays() {
-    let scene = Scene::load(std::path::Path::new("flatland_scenes/occluder.json")).unwrap();
-    let rs = ReferenceSettings {
-        spp: 40_000,
-        relative_step: 1e-2,
-    };
+    let text = std::fs::read_to_string("flatland_scenes/occluder.json")
+        .unwrap()
+        .replace(r#""reflectance": 0.5"#, r#""reflectance": 0.0"#);
+    let scene = Scene::from_json(&text, "black occluder").unwrap();
     let points = [DVec2::new(0.45, 0.0), DVec2::new(-0.5, -0.3), DVec2::new(0.6, 0.2)];
     let err = |rays: usize| -> f64 {
         points
             .iter()
             .map(|&x| {
-                let r =
-                    derivatives::reference_at(&scene, x, Outgoing::Direction(DVec2::X), &rs, &Default::default(), 2)
-                        .parts
-                        .single
-                        .luminance();
+                let r = volcache::study::exact2d::derivatives(&scene, x, DVec2::X, 1e-4).luminance();
                 let errs: f64 = (0..4)
                     .map(|seed| {
                         let a = aware_at(&scene, x, rays, seed).single.luminance();
@@ -153,6 +153,7 @@ fn aware_error_shrinks_with_more_rays() {
     let (coarse, fine) = (err(128), err(4096));
     println!("mean relative single-scattering gradient error: N=128 {coarse:.4}, N=4096 {fine:.4}");
     assert!(fine < 0.5 * coarse, "N=128: {coarse}, N=4096: {fine}");
+    assert!(fine < 0.003, "N=4096: {fine}");
 }
 
 /// Translating and rotating the whole scene moves and rotates the derivatives.

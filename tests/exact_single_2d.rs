@@ -31,8 +31,9 @@ fn gradient_errors(scene: &Scene, x: DVec2, omega_o: DVec2, seeds: u64) -> Vec<f
 /// used to end at the march's cut length, ln(1000)/σ_t, in front of the emitter, and
 /// the element joining the emitter's silhouette to that invented point carried the
 /// emitter with the near point's derivatives: 40–200% off at σ_t = 50, whatever the
-/// ray count. Measured now (4 seeds, 4096 rays): at most 3.5% (σ_t 20), 7.2% (σ_t
-/// 50), the size of the farther-vertex rule's value deficit at the silhouette.
+/// ray count. Measured (4 seeds, 4096 rays): at most 3.5% (σ_t 20) and 7.2% (σ_t 50)
+/// with escaped rays pushed behind the hits, the last hit standing short of the
+/// emitter's end; below 0.05% with the end found exactly (`pipeline::silhouette`).
 #[test]
 fn gradients_beside_an_emitter_in_thick_fog() {
     for sigma in [20.0, 50.0] {
@@ -46,7 +47,48 @@ fn gradients_beside_an_emitter_in_thick_fog() {
         for (px, py) in [(0.6, 0.2), (0.7, 0.2), (0.6, 0.1), (0.75, 0.15), (0.55, 0.25)] {
             let errs = gradient_errors(&scene, DVec2::new(px, py), DVec2::X, 4);
             println!("σ_t {sigma} at ({px}, {py}): ∇ errors {errs:.3?}");
-            assert!(errs.iter().all(|&e| e < 0.12), "σ_t {sigma} at ({px}, {py}): {errs:?}");
+            assert!(errs.iter().all(|&e| e < 0.01), "σ_t {sigma} at ({px}, {py}): {errs:?}");
+        }
+    }
+}
+
+/// The aware gradient below an emitter, d = 1e-2 … 1e-5 from it (issue 12 item 4).
+/// A ray grazing the emitter met it at r ≈ d/Δθ, and that hit ended the chain of
+/// surface elements in place of the emitter's end: the error grew as 1/d (σ_t = 1e-4,
+/// g = 0: 46% at 1e-3, 6× at 1e-4, 3200× at 1e-7). With the ends found exactly
+/// (`pipeline::silhouette`) and the surface form factors clamped alike for all
+/// elements, measured (seeds 1, 2): at most 0.6% down to d = 1e-5. What remains is
+/// the proxy's discretisation of phase × transmittance next to the surface, which
+/// still grows as 1/d where they vary (g = 0.99: 2.8% at 1e-3; σ_t = 1, g = 0.6: 6%
+/// at 1e-3, 99% at 1e-4), so those rows are checked at d = 1e-2 only (0.1%, 0.2%).
+#[test]
+fn gradients_next_to_an_emitter() {
+    let rows: [(f64, f64, &[f64], f64); 3] = [
+        (1e-4, 0.0, &[1e-2, 1e-3, 1e-4, 1e-5], 0.02),
+        (1e-4, 0.99, &[1e-2], 0.02),
+        (1.0, 0.6, &[1e-2], 0.02),
+    ];
+    for (sigma, g, distances, bound) in rows {
+        let text = format!(
+            r#"{{"domain": {{"min": [-1, -1], "max": [1, 1]}},
+                "segments": [{{"a": [0.5, 0.3], "b": [-0.5, 0.3], "emission": 1, "reflectance": 0}}],
+                "medium": {{"sigma_a": 0, "sigma_s": {sigma}, "g": {g}}}}}"#
+        );
+        let scene = Scene::from_json(&text, "below an emitter").unwrap();
+        for &d in distances {
+            let x = DVec2::new(0.1, 0.3 - d);
+            let omega_o = DVec2::new(0.6, 0.8);
+            let exact = exact2d::derivatives(&scene, x, omega_o, d * 1e-2).luminance();
+            for seed in [1, 2] {
+                let mut ps = ProbeSettings::with_rays(4096);
+                ps.settings.max_depth = 2;
+                let lf = capture(&scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, &Progress::new()).unwrap();
+                let aw = AwareSettings::default();
+                let got = aware(&lf, &build(&lf, aw.rule), &aw).single.luminance();
+                let err = (got.grad - exact.grad).length() / exact.grad.length();
+                println!("σ_t {sigma}, g {g}, d {d:e}, seed {seed}: ∇ error {err:.4}");
+                assert!(err < bound, "σ_t {sigma}, g {g}, d {d:e}: ∇ error {err}");
+            }
         }
     }
 }

@@ -19,7 +19,7 @@
 //! Near an edge (theory.md §7): each edge term is evaluated with x moved to at least
 //! `near_distance(longest edge)` from that edge segment (see `element` module docs).
 
-use super::distance::near_distance;
+use super::distance::{MIN_DISTANCE, near_distance};
 use super::space::{D3, Space};
 use super::taylor::Taylor2;
 use glam::{DMat3, DVec3};
@@ -84,6 +84,18 @@ fn edge_term(p: DVec3, q: DVec3, x: DVec3, r_min: f64) -> (DVec3, DMat3) {
 /// The signed solid angle of the triangle `v` seen from `x`, with gradient and
 /// Hessian in x. A closed mesh with outward normals gives 4π around x, 0 outside.
 pub fn triangle_form_factor(v: [DVec3; 3], x: DVec3) -> Taylor2<D3> {
+    let size = (v[1] - v[0])
+        .length()
+        .max((v[2] - v[1]).length())
+        .max((v[0] - v[2]).length());
+    triangle_form_factor_clamped(v, x, near_distance(size))
+}
+
+/// [`triangle_form_factor`] with an explicit clamping distance `r_min` for the edge
+/// terms of the derivatives (the value is exact). Triangles that share an edge must
+/// clamp it alike for their derivatives to cancel along it (a proxy's chain of
+/// surface elements), so callers that sum a mesh pass one `r_min` for all.
+pub fn triangle_form_factor_clamped(v: [DVec3; 3], x: DVec3, r_min: f64) -> Taylor2<D3> {
     let (a, b, c) = (v[0] - x, v[1] - x, v[2] - x);
     let (la, lb, lc) = (a.length(), b.length(), c.length());
     // a·(b × c) = a·((v1 − v0) × (v2 − v0)): edge vectors do not depend on x and do
@@ -91,11 +103,7 @@ pub fn triangle_form_factor(v: [DVec3; 3], x: DVec3) -> Taylor2<D3> {
     let num = a.dot((v[1] - v[0]).cross(v[2] - v[0]));
     let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
     let value = 2.0 * num.atan2(den);
-    let size = (v[1] - v[0])
-        .length()
-        .max((v[2] - v[1]).length())
-        .max((v[0] - v[2]).length());
-    let r_min = near_distance(size);
+    let r_min = r_min.max(MIN_DISTANCE);
     let mut grad = DVec3::ZERO;
     let mut jac = DMat3::ZERO;
     for (p, q) in [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])] {

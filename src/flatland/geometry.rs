@@ -114,6 +114,19 @@ impl Primitive<D2> for Segment {
 /// Segments with their acceleration structure (`pipeline::bvh`).
 pub type SegmentSet = Geometry<D2, Segment>;
 
+/// The end of segment `seg` that x sees strictly between the directions `d_in`
+/// (which meets the segment) and `d_out` (a neighbouring ray that does not): where
+/// the segment stops being visible. Used to put a proxy's silhouette vertex at the
+/// segment's true end instead of at the last ray's hit (issue 12: a ray grazing a
+/// surface hits it at r ≈ d/Δθ, and the gradient grew as 1/d).
+pub fn segment_silhouette(seg: &Segment, x: DVec2, d_in: DVec2, d_out: DVec2) -> Option<DVec2> {
+    let turn = cross(d_in, d_out);
+    [seg.a, seg.b].into_iter().find(|&e| {
+        let w = e - x;
+        cross(d_in, w) * turn > 0.0 && cross(w, d_out) * turn > 0.0 && w.dot(d_in + d_out) > 0.0
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -38,6 +38,10 @@ impl World for Scene {
         self.medium.as_ref()
     }
 
+    fn silhouette(&self, prim: u32, x: DVec2, d_in: DVec2, d_out: DVec2) -> Option<DVec2> {
+        super::geometry::segment_silhouette(&self.geometry.prims[prim as usize], x, d_in, d_out)
+    }
+
     fn surface(&self, hit: &Hit, dir: DVec2) -> SurfacePoint<D2> {
         let seg = &self.geometry.prims[hit.prim as usize];
         let (normal, active) = seg.facing_dir(dir);

@@ -130,9 +130,15 @@ pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp
     let soft = near_distance(e.size());
     let clamp = medium_clamp * lf.step;
     let form = match e.kind {
-        // Surfaces and shell pieces bridging an occluder's edge: the angle (solid
-        // angle), times the thickness Δt carried in a medium piece's radiance.
-        ElementKind::Surface => S::form_factor(e.v, x),
+        // Surfaces: the angle (solid angle), unclamped. Every vertex is a ray's end
+        // or a silhouette, never nearer than the nearest surface, and the elements'
+        // vertex terms cancel in pairs along a chain only if each vertex is treated
+        // alike in both; a clamp scaled by each element's size broke that next to
+        // surfaces (a long silhouette element clamped a near vertex its short
+        // neighbour did not: gradient 26× off at 1e-5 from an emitter).
+        ElementKind::Surface => S::form_factor_clamped(e.v, x, 0.0),
+        // Shell pieces bridging an occluder's edge: the angle (solid angle), times
+        // the thickness Δt carried in a medium piece's radiance.
         // Its near field is bounded at the march resolution: within medium_clamp·Δt
         // of x (where the form factor's derivatives grow like 1/distance to an edge)
         // it is treated as an ordinary shell piece.

@@ -10,12 +10,12 @@
 //! whichever code asks for the direction.
 
 use super::directions;
-use crate::core::element::segment_form_factor;
+use crate::core::element::{segment_form_factor, segment_form_factor_clamped};
 use crate::core::phase::{Hg2, Hg3};
 use crate::core::rng::Sampler;
 use crate::core::space::{D2, D3, Space};
 use crate::core::taylor::Taylor2;
-use crate::core::triangle::triangle_form_factor;
+use crate::core::triangle::{triangle_form_factor, triangle_form_factor_clamped};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 use std::f64::consts::{FRAC_1_PI, TAU};
@@ -78,6 +78,10 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     /// The angle (solid angle) a segment (triangle) subtends at `x`, with its
     /// gradient and Hessian in x (theory.md §5).
     fn form_factor(v: Self::Simplex<Self::Vec>, x: Self::Vec) -> Taylor2<Self>;
+    /// [`Dim::form_factor`] with one clamping distance of the derivatives' vertex
+    /// (edge) terms, shared by every element of a sum so that terms cancel exactly
+    /// where elements meet.
+    fn form_factor_clamped(v: Self::Simplex<Self::Vec>, x: Self::Vec, r_min: f64) -> Taylor2<Self>;
 }
 
 /// The componentwise operations of [`Dim`] for a glam vector type (the same names in
@@ -175,6 +179,10 @@ impl Dim for D2 {
     fn form_factor([a, b]: [DVec2; 2], x: DVec2) -> Taylor2<D2> {
         segment_form_factor(a, b, x)
     }
+
+    fn form_factor_clamped([a, b]: [DVec2; 2], x: DVec2, r_min: f64) -> Taylor2<D2> {
+        segment_form_factor_clamped(a, b, x, r_min)
+    }
 }
 
 impl Dim for D3 {
@@ -243,5 +251,9 @@ impl Dim for D3 {
     }
     fn form_factor(v: [DVec3; 3], x: DVec3) -> Taylor2<D3> {
         triangle_form_factor(v, x)
+    }
+
+    fn form_factor_clamped(v: [DVec3; 3], x: DVec3, r_min: f64) -> Taylor2<D3> {
+        triangle_form_factor_clamped(v, x, r_min)
     }
 }

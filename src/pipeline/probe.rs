@@ -31,6 +31,7 @@ use super::dim::Dim;
 use super::lobe::Lobe;
 use super::medium::Region;
 use super::path::{Settings, radiance_leaving, sample_at};
+use super::silhouette::{RayEnd, find_edges};
 use super::world::{DirectLight, Hit, World};
 use crate::core::color::Rgb;
 pub use crate::core::phase::Outgoing;
@@ -86,6 +87,9 @@ pub struct SurfaceHit<S: Dim> {
     pub normal: S::Vec,
     /// L_o(h → x): emission (active side) plus the reflected estimate.
     pub radiance: Rgb,
+    /// Where the hit primitive's visible silhouette lies next to this ray, when a
+    /// neighbouring ray sees something else ([`super::silhouette`]).
+    pub edge: Option<S::Vec>,
 }
 
 /// One ray of the light field.
@@ -222,6 +226,7 @@ pub fn capture<W: World>(
                     prim: h.prim,
                     normal: sp.normal,
                     radiance,
+                    edge: None,
                 }
             });
             let length = hit.map_or(t_cut, |h| h.t);
@@ -270,6 +275,22 @@ pub fn capture<W: World>(
         let (ray, c) = r?;
         out.push(ray);
         cost += c;
+    }
+    let ends: Vec<_> = out
+        .iter()
+        .map(|r| RayEnd {
+            dir: r.dir,
+            prim: r.hit.as_ref().map(|h| h.prim),
+            point: r.hit.as_ref().map_or(x, |h| h.point),
+            length: r.length,
+        })
+        .collect();
+    let (edges, c) = find_edges(world, x, &ends, &simplices);
+    cost += c;
+    for (ray, edge) in out.iter_mut().zip(edges) {
+        if let Some(h) = ray.hit.as_mut() {
+            h.edge = edge;
+        }
     }
     let (direct_lights, c) = world.direct_lights(x);
     Ok(LightField {

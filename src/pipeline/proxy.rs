@@ -3,8 +3,9 @@
 //!
 //! - Surface elements: each simplex of neighbouring directions (a pair of rays in
 //!   2D, a triangle of the sphere's triangulation in 3D) with its vertices moved to
-//!   the rays' end points (hits; escaped rays end at the cut length with the
-//!   radiance of [`ProbeRay::end`]). Where the vertices lie at very different
+//!   the rays' end points (hits, or the hit surface's exact silhouette where a
+//!   neighbour sees something else, see [`super::silhouette`]; escaped rays behind
+//!   the simplex's hits with the radiance of [`ProbeRay::end`]). Where the vertices lie at very different
 //!   depths the element bridges an occluder's edge and the background: its form
 //!   factor (angle, solid angle) changes fast as x moves, which is how occlusion
 //!   changes enter the derivatives. Vertices are ordered so that it is positive
@@ -13,9 +14,10 @@
 //!   with thickness Δt. Where some ray stopped before shell i (it hit an occluder),
 //!   the element bridges that ray's end point and the others' samples.
 //!
-//! A surface element carries the radiance of its vertex **farther from x**
+//! A bridging surface element carries the radiance of its vertex **farther from x**
 //! (Schwarzhaupt et al. 2012: what gets revealed or hidden as x moves);
-//! [`RadianceRule::Average`] is the alternative to measure against. Medium elements
+//! [`RadianceRule::Average`] is the alternative to measure against. A piece of one
+//! continuous surface carries its vertices' mean, anchored at their centroid. Medium elements
 //! within a shell average their samples (the farther rule would shift every shell
 //! outwards by the rays' jitter: a measured 5% loss through the transmittance). A
 //! bridging medium element is anchored at its samples' centroid and carries their
@@ -27,6 +29,7 @@
 
 use super::dim::Dim;
 use super::probe::{LightField, ProbeRay};
+use super::silhouette::BRIDGE_RATIO;
 use crate::core::color::Rgb;
 use crate::core::space::Space;
 use serde::{Deserialize, Serialize};
@@ -86,9 +89,6 @@ impl<S: Dim> Element<S> {
     }
 }
 
-/// Vertices whose depths differ by more than this fraction bridge a discontinuity.
-const BRIDGE_RATIO: f64 = 0.1;
-
 /// A vertex of an element: position, distance from x (for the rules), radiance, and
 /// where its transmittance and phase are evaluated.
 type Vertex<S> = (<S as Space>::Vec, f64, Rgb, <S as Space>::Vec);
@@ -140,7 +140,12 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
         .iter()
         .map(|r| {
             let (p, d, l) = r.end(x);
-            (p, d, l, p)
+            // A hit next to a visibility boundary stands at the surface's true edge
+            // (see `silhouette`), with the radiance its ray found.
+            match r.hit.as_ref().and_then(|h| h.edge) {
+                Some(e) => (e, S::length(e - x), l, e),
+                None => (p, d, l, p),
+            }
         })
         .collect();
     let mut out = Vec::with_capacity(lf.simplices.len() * 2);
@@ -170,6 +175,11 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
             .iter()
             .fold((f64::INFINITY, 0.0f64), |(lo, hi), e| (lo.min(e.1), hi.max(e.1)));
         let bridging = dmax - dmin > BRIDGE_RATIO * dmin;
+        // A piece of one continuous surface carries its vertices' mean, phase and
+        // transmittance at their centroid (second order along a chain; the farther
+        // vertex's values are first order, and where vertices are near x their
+        // angles move fast: the gradient grew as 1/d next to a surface at g = 0.99).
+        let rule = if bridging { rule } else { RadianceRule::Average };
         out.push(make(x, v, rule, ElementKind::Surface, bridging, measure(t)));
     }
     let shells = lf.rays.iter().map(|r| r.samples.len()).max().unwrap_or(0);

@@ -94,6 +94,11 @@ pub trait World: Sync {
         self.medium().map_or(Rgb::ONE, |m| m.transmittance(p, w, dist))
     }
 
+    /// The point of primitive `prim`'s boundary that `x` sees strictly between the
+    /// directions `d_in` (which meets it) and `d_out`, in the plane through x they
+    /// span (in 2D, the segment's end between them), if there is one.
+    fn silhouette(&self, prim: u32, x: VecOf<Self>, d_in: VecOf<Self>, d_out: VecOf<Self>) -> Option<VecOf<Self>>;
+
     /// The surface point of `hit`, found by a ray travelling along `dir`.
     fn surface(&self, hit: &Hit, dir: VecOf<Self>) -> SurfacePoint<Self::S>;
 

@@ -249,6 +249,32 @@ pub fn parse_obj(
     Ok(tris)
 }
 
+/// The point of triangle `tri`'s boundary that x sees strictly between the
+/// directions `d_in` (which meets the triangle) and `d_out` (a neighbouring ray that
+/// does not), in the plane through x they span: where the triangle stops being
+/// visible along that arc (see `flatland::geometry::segment_silhouette`).
+pub fn triangle_silhouette(tri: &Triangle, x: DVec3, d_in: DVec3, d_out: DVec3) -> Option<DVec3> {
+    let n = d_in.cross(d_out);
+    let v = tri.vertices();
+    let mut best: Option<(f64, DVec3)> = None;
+    for k in 0..3 {
+        let (p, q) = (v[k], v[(k + 1) % 3]);
+        let (sp, sq) = (n.dot(p - x), n.dot(q - x));
+        // The edge crosses the plane (an end on it counts once, from either side).
+        if sp == sq || (sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0) {
+            continue;
+        }
+        let c = p + (q - p) * (sp / (sp - sq));
+        let w = c - x;
+        let inside = d_in.cross(w).dot(n) > 0.0 && w.cross(d_out).dot(n) > 0.0 && w.dot(d_in + d_out) > 0.0;
+        let cos = w.normalize().dot(d_in);
+        if inside && best.is_none_or(|(b, _)| cos > b) {
+            best = Some((cos, c));
+        }
+    }
+    best.map(|(_, c)| c)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

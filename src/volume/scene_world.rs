@@ -40,6 +40,10 @@ impl World for Scene {
         self.medium.as_ref()
     }
 
+    fn silhouette(&self, prim: u32, x: DVec3, d_in: DVec3, d_out: DVec3) -> Option<DVec3> {
+        super::mesh::triangle_silhouette(&self.geometry.prims[prim as usize], x, d_in, d_out)
+    }
+
     fn surface(&self, hit: &Hit, dir: DVec3) -> SurfacePoint<D3> {
         let tri = &self.geometry.prims[hit.prim as usize];
         let surf = &self.surfaces[tri.shape as usize];
