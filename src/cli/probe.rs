@@ -119,9 +119,9 @@ pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
         AnyScene::Volume(s) => {
             anyhow::ensure!(
                 a.method == Method::Pt,
-                "--method {:?}: 3D points are probed by path tracing (--method pt); \
+                "--method {}: 3D points are probed by path tracing (--method pt); \
                  3D derivatives are render3d's (--method ours|jarosz08)",
-                a.method
+                format!("{:?}", a.method).to_lowercase()
             );
             anyhow::ensure!(
                 a.omega_o.is_none(),

@@ -43,7 +43,8 @@ struct SensorOut {
 fn check_options(a: &ProbeArgs, quantity: ProbeQuantity) -> anyhow::Result<()> {
     anyhow::ensure!(
         quantity == ProbeQuantity::Irradiance,
-        "--sensor measures irradiance; it does not apply to --quantity {quantity:?}"
+        "--sensor measures irradiance; it does not apply to --quantity {}",
+        format!("{quantity:?}").to_lowercase()
     );
     anyhow::ensure!(
         !a.sensor.is_empty(),
@@ -52,8 +53,8 @@ fn check_options(a: &ProbeArgs, quantity: ProbeQuantity) -> anyhow::Result<()> {
     );
     anyhow::ensure!(
         a.method == Method::Pt,
-        "--method {:?}: irradiance is path traced (--method pt); derivatives are of L_s",
-        a.method
+        "--method {}: irradiance is path traced (--method pt); derivatives are of L_s",
+        format!("{:?}", a.method).to_lowercase()
     );
     anyhow::ensure!(
         a.at.is_empty(),
