@@ -84,21 +84,21 @@ pub fn parse_coords(s: &str) -> Result<Coords, String> {
 
 /// A scene of either dimension: a 3D scene file has a `camera`, a 2D one a `domain`.
 pub enum AnyScene {
-    Flat(Scene),
-    Volume(volcache::volume::scene::Scene),
+    Flat(Box<Scene>),
+    Volume(Box<volcache::volume::scene::Scene>),
 }
 
 /// Load a 2D or 3D scene file (the embedded 2D default when none is given). A
 /// file that is not JSON, or has no `camera`, is read as 2D, whose errors name it.
 pub fn load_any_scene(path: Option<&Path>) -> anyhow::Result<AnyScene> {
     let Some(p) = path else {
-        return Ok(AnyScene::Flat(Scene::default_scene()));
+        return Ok(AnyScene::Flat(Box::new(Scene::default_scene())));
     };
     let text = volcache::scene_check::read(p)?;
     let is_3d = serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| v.get("camera").is_some());
     Ok(match is_3d {
-        true => AnyScene::Volume(volcache::volume::scene::Scene::load(p)?),
-        false => AnyScene::Flat(Scene::load(p)?),
+        true => AnyScene::Volume(Box::new(volcache::volume::scene::Scene::load(p)?)),
+        false => AnyScene::Flat(Box::new(Scene::load(p)?)),
     })
 }
 

@@ -18,6 +18,7 @@ mod image3d;
 mod merge3d;
 mod probe;
 mod probe_args;
+mod probe_common;
 mod probe_derivs;
 mod probe_sensor;
 mod render3d;

@@ -2,44 +2,16 @@
 //! or the mean irradiance over a sensor ([`super::probe_sensor`]). Every number is
 //! `pipeline::path`'s estimate, the same in both dimensions.
 
-use super::common::{AnyScene, check_angle, check_spp, load_any_scene};
+use super::common::{AnyScene, check_angle, load_any_scene};
 use super::probe_args::{Method, ProbeArgs, ProbeQuantity};
+use super::probe_common::{Common, PartsOut, coords_of, std_error_out};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::process::ExitCode;
 use volcache::core::color::{Rgb, luminance};
-use volcache::core::space::Space;
-use volcache::limits;
-use volcache::pipeline::path::{Estimate, Parts, Query, Settings, estimate};
+use volcache::pipeline::path::{Query, estimate};
 use volcache::pipeline::world::{VecOf, World};
-
-#[derive(Serialize)]
-pub struct PartsOut {
-    pub direct: [f64; 3],
-    pub single: [f64; 3],
-    pub multiple: [f64; 3],
-    pub total: [f64; 3],
-}
-
-impl From<&Parts> for PartsOut {
-    fn from(p: &Parts) -> Self {
-        PartsOut {
-            direct: p.direct.to_array(),
-            single: p.single.to_array(),
-            multiple: p.multiple.to_array(),
-            total: p.total().to_array(),
-        }
-    }
-}
-
-/// Standard errors per part, and of the total (not the parts' sum).
-pub fn std_error_out(e: &Estimate) -> PartsOut {
-    PartsOut {
-        total: e.total_std_error.to_array(),
-        ..(&e.std_error).into()
-    }
-}
 
 #[derive(Serialize)]
 struct ProbeOut {
@@ -61,34 +33,6 @@ struct ProbeOut {
     seed: u64,
     rays: u64,
     seconds: f64,
-}
-
-/// A vector's coordinates, in either dimension.
-pub fn coords_of<S: Space>(v: S::Vec) -> Vec<f64> {
-    (0..S::DIM).map(|k| v[k]).collect()
-}
-
-/// What every quantity shares: samples, seed, path settings.
-pub struct Common {
-    pub spp: u32,
-    pub seed: u64,
-    pub settings: Settings,
-}
-
-impl Common {
-    /// The options over the scene's `render` defaults (64 × its spp per point).
-    pub fn new(a: &ProbeArgs, spp: u32, seed: u64, max_depth: u32) -> anyhow::Result<Common> {
-        let spp = a.spp.unwrap_or(spp.saturating_mul(64));
-        check_spp("--spp", spp, limits::MAX_PROBE_SPP)?;
-        Ok(Common {
-            spp,
-            seed: a.seed.unwrap_or(seed),
-            settings: Settings {
-                max_depth,
-                ..Settings::default()
-            },
-        })
-    }
 }
 
 pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
@@ -114,7 +58,7 @@ pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
             let deg = a.omega_o.unwrap_or(r.omega_o_deg);
             check_angle("--omega-o", deg)?;
             let w = DVec2::from_angle(deg.to_radians());
-            at_points(s, &a.points2()?, &c, a.method, quantity, Some(deg), |_| w)
+            at_points(&**s, &a.points2()?, &c, a.method, quantity, Some(deg), |_| w)
         }
         AnyScene::Volume(s) => {
             anyhow::ensure!(
@@ -132,7 +76,7 @@ pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
             let cam = &s.camera;
             // ω_o towards the camera; at the camera itself, against the view.
             let towards = |x: DVec3| (cam.position - x).try_normalize().unwrap_or(-cam.forward);
-            at_points(s, &a.points3()?, &c, a.method, quantity, None, towards)
+            at_points(&**s, &a.points3()?, &c, a.method, quantity, None, towards)
         }
     };
     print_points(&out, a.json)

@@ -5,8 +5,8 @@
 //! sensor below the medium facing it, under a beam of unit irradiance.
 
 use super::common::{AnyScene, Coords};
-use super::probe::{Common, PartsOut, coords_of};
 use super::probe_args::{Method, ProbeArgs, ProbeQuantity, coords};
+use super::probe_common::{Common, PartsOut, coords_of, std_error_out};
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 use std::process::ExitCode;
@@ -75,7 +75,7 @@ pub fn run(a: &ProbeArgs, quantity: ProbeQuantity, scene: &AnyScene) -> anyhow::
                 let [ax, ay, bx, by] = coords(t, "--sensor", "AX,AY,BX,BY (a 2D sensor segment)")?;
                 Sensor::segment(DVec2::new(ax, ay), DVec2::new(bx, by), s.scale()).map_err(|e| bad(t, e))
             });
-            measure(s, &sensors.collect::<anyhow::Result<Vec<_>>>()?, &c)
+            measure(&**s, &sensors.collect::<anyhow::Result<Vec<_>>>()?, &c)
         }
         AnyScene::Volume(s) => {
             let r = &s.desc.render;
@@ -86,7 +86,7 @@ pub fn run(a: &ProbeArgs, quantity: ProbeQuantity, scene: &AnyScene) -> anyhow::
                 let p = |k: usize| DVec3::new(v[k], v[k + 1], v[k + 2]);
                 Sensor::parallelogram(p(0), p(3), p(6), s.scale()).map_err(|e| bad(t, e))
             });
-            measure(s, &sensors.collect::<anyhow::Result<Vec<_>>>()?, &c)
+            measure(&**s, &sensors.collect::<anyhow::Result<Vec<_>>>()?, &c)
         }
     };
     print(&out, a.json)
@@ -108,7 +108,7 @@ fn measure<W: World>(world: &W, sensors: &[Sensor<W::S>], c: &Common) -> Vec<Sen
             measure: sn.measure,
             quantity: ProbeQuantity::Irradiance,
             value: (&e.mean).into(),
-            std_error: super::probe::std_error_out(&e),
+            std_error: std_error_out(&e),
             flux: (total * sn.measure).to_array(),
             flux_std_error: (se * sn.measure).to_array(),
             luminance: luminance(total),
