@@ -118,8 +118,18 @@ fn command(s: &mut Sampler, three_d: bool) -> (Vec<String>, Vec<&'static str>) {
                 add(&["probe", "scene.json", "--json"]);
                 let method = pick(s, &["pt", "aware", "unaware", "reference"]);
                 add(&["--method", method]);
-                let at = opt(s, &["0,0", "0.3,-0.2", "1e12,0", "0,1e-300"], &["1e13,0", "nan,0"]);
-                add(&[&format!("--at={at}")]);
+                if s.next_f64() < 0.2 {
+                    // An irradiance meter instead of points (refused beside a derivative method).
+                    let sensor = opt(
+                        s,
+                        &["-1,0,1,0", "0,0,1e-3,1e12", "1e12,0,-1e12,0"],
+                        &["0,0,0,0", "1,2,3", "nan,0,1,0"],
+                    );
+                    add(&[&format!("--sensor={sensor}")]);
+                } else {
+                    let at = opt(s, &["0,0", "0.3,-0.2", "1e12,0", "0,1e-300"], &["1e13,0", "nan,0"]);
+                    add(&[&format!("--at={at}")]);
+                }
                 add(&["--spp", opt(s, &["1", "4"], &["0"])]);
                 add(&["--rays", opt(s, &["3", "16"], &["2", "1048577"])]);
                 add(&["--steps", opt(s, &["1", "3"], &["0", "4097"])]);

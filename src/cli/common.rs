@@ -45,22 +45,61 @@ pub fn parse_res(s: &str) -> Result<[u32; 2], String> {
     }
 }
 
+/// One coordinate of `s`: finite and within ±`limits::MAX_COORD`.
+fn coordinate(v: &str, s: &str) -> Result<f64, String> {
+    let c = v
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| format!("`{v}` in `{s}` is not a finite number"))?;
+    if c.abs() > limits::MAX_COORD {
+        return Err(format!("`{v}` in `{s}` lies beyond ±{:e}", limits::MAX_COORD));
+    }
+    Ok(c)
+}
+
 /// Parse `X,Y` as a point within ±`limits::MAX_COORD`.
 pub fn parse_point(s: &str) -> Result<DVec2, String> {
     let (x, y) = s.split_once(',').ok_or_else(|| format!("expected X,Y, got `{s}`"))?;
-    let p = |v: &str| {
-        let c = v
-            .trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| format!("`{v}` in `{s}` is not a finite number"))?;
-        if c.abs() > limits::MAX_COORD {
-            return Err(format!("`{v}` in `{s}` lies beyond ±{:e}", limits::MAX_COORD));
-        }
-        Ok(c)
+    Ok(DVec2::new(coordinate(x, s)?, coordinate(y, s)?))
+}
+
+/// Comma-separated numbers, each within ±`limits::MAX_COORD` (points and sensors
+/// whose count depends on the scene's dimension, checked by the caller).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coords {
+    /// As given, for messages.
+    pub text: String,
+    pub values: Vec<f64>,
+}
+
+pub fn parse_coords(s: &str) -> Result<Coords, String> {
+    let values = s.split(',').map(|v| coordinate(v, s)).collect::<Result<_, _>>()?;
+    Ok(Coords {
+        text: s.to_string(),
+        values,
+    })
+}
+
+/// A scene of either dimension: a 3D scene file has a `camera`, a 2D one a `domain`.
+pub enum AnyScene {
+    Flat(Box<Scene>),
+    Volume(Box<volcache::volume::scene::Scene>),
+}
+
+/// Load a 2D or 3D scene file (the embedded 2D default when none is given). A
+/// file that is not JSON, or has no `camera`, is read as 2D, whose errors name it.
+pub fn load_any_scene(path: Option<&Path>) -> anyhow::Result<AnyScene> {
+    let Some(p) = path else {
+        return Ok(AnyScene::Flat(Box::new(Scene::default_scene())));
     };
-    Ok(DVec2::new(p(x)?, p(y)?))
+    let text = volcache::scene_check::read(p)?;
+    let is_3d = serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| v.get("camera").is_some());
+    Ok(match is_3d {
+        true => AnyScene::Volume(Box::new(volcache::volume::scene::Scene::load(p)?)),
+        false => AnyScene::Flat(Box::new(Scene::load(p)?)),
+    })
 }
 
 /// A count option within `1..=max`.

@@ -18,7 +18,9 @@ mod image3d;
 mod merge3d;
 mod probe;
 mod probe_args;
+mod probe_common;
 mod probe_derivs;
+mod probe_sensor;
 mod render3d;
 mod render3d_cache;
 mod setup3d;
@@ -48,7 +50,8 @@ enum Command {
     App(app::AppArgs),
     /// Render a scene's radiance field (L_s or fluence) to PNG, and optionally EXR and JSON.
     Field(field::FieldArgs),
-    /// Estimate L_s (or fluence) and its parts at points, printed as a table or JSON.
+    /// Estimate L_s (or fluence) and its parts at points of a 2D or 3D scene, or the mean
+    /// irradiance over a sensor (`--sensor`), printed as a table or JSON.
     Probe(probe_args::ProbeArgs),
     /// Reconstruct the field from a radiance cache (ours, jarosz08) or path tracing (pt), with
     /// the cache distribution, the error map against a reference and the costs.

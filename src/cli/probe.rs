@@ -1,42 +1,29 @@
-//! `volcache probe`: L_s (or fluence) and its parts at points.
+//! `volcache probe`: L_s (or fluence) and its parts at points of a 2D or 3D scene,
+//! or the mean irradiance over a sensor ([`super::probe_sensor`]). Every number is
+//! `pipeline::path`'s estimate, the same in both dimensions.
 
-use super::common::{check_angle, check_spp, load_scene};
-use super::probe_args::{Method, ProbeArgs};
-use glam::DVec2;
+use super::common::{AnyScene, check_angle, load_any_scene};
+use super::probe_args::{Method, ProbeArgs, ProbeQuantity};
+use super::probe_common::{Common, PartsOut, coords_of, std_error_out};
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::process::ExitCode;
 use volcache::core::color::{Rgb, luminance};
-use volcache::flatland::scene_desc::Quantity;
-use volcache::limits;
-use volcache::pipeline::path::{Parts, Query, Settings, estimate};
-use volcache::pipeline::world::World;
-
-#[derive(Serialize)]
-struct PartsOut {
-    direct: [f64; 3],
-    single: [f64; 3],
-    multiple: [f64; 3],
-    total: [f64; 3],
-}
-
-impl From<&Parts> for PartsOut {
-    fn from(p: &Parts) -> Self {
-        PartsOut {
-            direct: p.direct.to_array(),
-            single: p.single.to_array(),
-            multiple: p.multiple.to_array(),
-            total: p.total().to_array(),
-        }
-    }
-}
+use volcache::pipeline::path::{Query, estimate};
+use volcache::pipeline::world::{VecOf, World};
 
 #[derive(Serialize)]
 struct ProbeOut {
-    at: [f64; 2],
+    /// X,Y (2D) or X,Y,Z (3D).
+    at: Vec<f64>,
     method: Method,
-    quantity: Quantity,
-    omega_o_deg: f64,
+    quantity: ProbeQuantity,
+    /// ω_o of L_s in degrees (2D only; 3D: towards the camera, see `omega_o`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    omega_o_deg: Option<f64>,
+    /// The unit direction in which L_s leaves the point.
+    omega_o: Vec<f64>,
     /// False where the quantity is not defined (L_s outside the medium: zero).
     inside_medium: bool,
     value: PartsOut,
@@ -49,69 +36,117 @@ struct ProbeOut {
 }
 
 pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
-    if a.method != Method::Pt {
-        return super::probe_derivs::run(&a);
-    }
-    let scene = load_scene(a.scene.as_deref())?;
-    let r = &scene.desc.render;
-    let spp = a.spp.unwrap_or(r.spp.saturating_mul(64));
-    check_spp("--spp", spp, limits::MAX_PROBE_SPP)?;
-    let seed = a.seed.unwrap_or(r.seed);
-    let quantity = a.quantity.map_or(r.quantity, Into::into);
-    let omega_deg = a.omega_o.unwrap_or(r.omega_o_deg);
-    check_angle("--omega-o", omega_deg)?;
-    let q = Query::from_quantity(quantity, DVec2::from_angle(omega_deg.to_radians()));
-    let settings = Settings {
-        max_depth: r.max_depth,
-        ..Settings::default()
+    let scene = load_any_scene(a.scene.as_deref())?;
+    let quantity = match (a.quantity, &scene) {
+        (Some(q), _) => q,
+        (None, _) if !a.sensor.is_empty() => ProbeQuantity::Irradiance,
+        (None, AnyScene::Flat(s)) => s.desc.render.quantity.into(),
+        (None, AnyScene::Volume(_)) => ProbeQuantity::Ls,
     };
-    let out: Vec<ProbeOut> =
-        a.at.par_iter()
-            .enumerate()
-            .map(|(k, &x)| {
-                let t = std::time::Instant::now();
-                let e = estimate(&scene, x, &q, &settings, spp, seed, k as u64);
-                let std_error = Parts {
-                    direct: e.std_error.direct,
-                    single: e.std_error.single,
-                    multiple: e.std_error.multiple,
-                };
-                ProbeOut {
-                    at: x.to_array(),
-                    method: a.method,
-                    quantity,
-                    omega_o_deg: omega_deg,
-                    inside_medium: scene.medium_at(x).is_some(),
-                    value: (&e.mean).into(),
-                    std_error: (&std_error).into(),
-                    luminance: luminance(e.mean.total()),
-                    spp,
-                    seed,
-                    rays: e.rays,
-                    seconds: t.elapsed().as_secs_f64(),
-                }
-            })
-            .collect();
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&out)?);
-    } else {
-        let fmt = |c: [f64; 3]| format!("{:.5e}", luminance(Rgb::from_array(c)));
-        println!(
-            "{:>22} {:>12} {:>12} {:>12} {:>12} {:>10}",
-            "point", "direct", "single", "multiple", "total", "rays"
-        );
-        for o in &out {
-            println!(
-                "{:>22} {:>12} {:>12} {:>12} {:>12} {:>10}",
-                format!("({}, {})", o.at[0], o.at[1]),
-                fmt(o.value.direct),
-                fmt(o.value.single),
-                fmt(o.value.multiple),
-                fmt(o.value.total),
-                o.rays
-            );
+    if quantity == ProbeQuantity::Irradiance || !a.sensor.is_empty() {
+        return super::probe_sensor::run(&a, quantity, &scene);
+    }
+    anyhow::ensure!(
+        !a.at.is_empty(),
+        "--at: give at least one point (X,Y; in 3D X,Y,Z), or a --sensor for irradiance"
+    );
+    let out = match &scene {
+        AnyScene::Flat(s) if a.method != Method::Pt => return super::probe_derivs::run(&a, s),
+        AnyScene::Flat(s) => {
+            let r = &s.desc.render;
+            let c = Common::new(&a, r.spp, r.seed, r.max_depth)?;
+            let deg = a.omega_o.unwrap_or(r.omega_o_deg);
+            check_angle("--omega-o", deg)?;
+            let w = DVec2::from_angle(deg.to_radians());
+            at_points(&**s, &a.points2()?, &c, a.method, quantity, Some(deg), |_| w)
         }
-        println!("(luminance; {spp} samples per point, seed {seed})");
+        AnyScene::Volume(s) => {
+            anyhow::ensure!(
+                a.method == Method::Pt,
+                "--method {}: 3D points are probed by path tracing (--method pt); \
+                 3D derivatives are render3d's (--method ours|jarosz08)",
+                format!("{:?}", a.method).to_lowercase()
+            );
+            anyhow::ensure!(
+                a.omega_o.is_none(),
+                "--omega-o: in a 3D scene L_s leaves each point towards the camera, as render3d caches it"
+            );
+            let r = &s.desc.render;
+            let c = Common::new(&a, r.spp, r.seed, r.max_depth)?;
+            let cam = &s.camera;
+            // ω_o towards the camera; at the camera itself, against the view.
+            let towards = |x: DVec3| (cam.position - x).try_normalize().unwrap_or(-cam.forward);
+            at_points(&**s, &a.points3()?, &c, a.method, quantity, None, towards)
+        }
+    };
+    print_points(&out, a.json)
+}
+
+/// The estimate at each point (in parallel over points; each point's streams
+/// are its own, so the result does not depend on the thread count).
+fn at_points<W: World>(
+    world: &W,
+    points: &[VecOf<W>],
+    c: &Common,
+    method: Method,
+    quantity: ProbeQuantity,
+    omega_o_deg: Option<f64>,
+    omega_o: impl Fn(VecOf<W>) -> VecOf<W> + Sync,
+) -> Vec<ProbeOut> {
+    points
+        .par_iter()
+        .enumerate()
+        .map(|(k, &x)| {
+            let t = std::time::Instant::now();
+            let w = omega_o(x);
+            let q = match quantity {
+                ProbeQuantity::Fluence => Query::Fluence,
+                _ => Query::InScattered { omega_o: w },
+            };
+            let e = estimate(world, x, &q, &c.settings, c.spp, c.seed, k as u64);
+            ProbeOut {
+                at: coords_of::<W::S>(x),
+                method,
+                quantity,
+                omega_o_deg,
+                omega_o: coords_of::<W::S>(w),
+                inside_medium: world.medium_at(x).is_some(),
+                value: (&e.mean).into(),
+                std_error: std_error_out(&e),
+                luminance: luminance(e.mean.total()),
+                spp: c.spp,
+                seed: c.seed,
+                rays: e.rays,
+                seconds: t.elapsed().as_secs_f64(),
+            }
+        })
+        .collect()
+}
+
+fn print_points(out: &[ProbeOut], json: bool) -> anyhow::Result<ExitCode> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(out)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    let fmt = |c: [f64; 3]| format!("{:.5e}", luminance(Rgb::from_array(c)));
+    println!(
+        "{:>28} {:>12} {:>12} {:>12} {:>12} {:>10}",
+        "point", "direct", "single", "multiple", "total", "rays"
+    );
+    for o in out {
+        let at: Vec<String> = o.at.iter().map(|v| v.to_string()).collect();
+        println!(
+            "{:>28} {:>12} {:>12} {:>12} {:>12} {:>10}",
+            format!("({})", at.join(", ")),
+            fmt(o.value.direct),
+            fmt(o.value.single),
+            fmt(o.value.multiple),
+            fmt(o.value.total),
+            o.rays
+        );
+    }
+    if let Some(o) = out.first() {
+        println!("(luminance; {} samples per point, seed {})", o.spp, o.seed);
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,12 +1,34 @@
 //! The options of `volcache probe`, shared by its path-traced values
-//! ([`super::probe`]) and its derivatives ([`super::probe_derivs`]).
+//! ([`super::probe`]), its irradiance meters ([`super::probe_sensor`]) and its
+//! derivatives ([`super::probe_derivs`]).
 
-use super::common::parse_point;
-use super::field::QuantityArg;
+use super::common::{Coords, parse_coords};
 use clap::{Args, ValueEnum};
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use serde::Serialize;
 use std::path::PathBuf;
+use volcache::flatland::scene_desc::Quantity;
+
+/// What `probe` estimates.
+#[derive(Clone, Copy, Debug, ValueEnum, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ProbeQuantity {
+    /// In-scattered radiance L_s at points.
+    Ls,
+    /// Fluence at points.
+    Fluence,
+    /// Mean irradiance over the front of a `--sensor`.
+    Irradiance,
+}
+
+impl From<Quantity> for ProbeQuantity {
+    fn from(q: Quantity) -> Self {
+        match q {
+            Quantity::Ls => ProbeQuantity::Ls,
+            Quantity::Fluence => ProbeQuantity::Fluence,
+        }
+    }
+}
 
 #[derive(Clone, Copy, Debug, ValueEnum, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
@@ -25,9 +47,15 @@ pub enum Method {
 pub struct ProbeArgs {
     /// Scene JSON (default: the embedded occluder scene).
     pub scene: Option<PathBuf>,
-    /// Point X,Y (repeat for several points).
-    #[arg(long = "at", value_parser = parse_point, required = true, allow_hyphen_values = true)]
-    pub at: Vec<DVec2>,
+    /// Point X,Y (3D scenes: X,Y,Z); repeat for several points.
+    #[arg(long = "at", value_parser = parse_coords, allow_hyphen_values = true)]
+    pub at: Vec<Coords>,
+    /// Irradiance meter (implies `--quantity irradiance`; repeat for several). 2D: the
+    /// segment AX,AY,BX,BY, measuring light arriving at its left side (as scene
+    /// segments' front). 3D: the parallelogram OX,OY,OZ,UX,UY,UZ,VX,VY,VZ (corner and
+    /// two edges, front along u × v, as scene quads).
+    #[arg(long, value_parser = parse_coords, allow_hyphen_values = true)]
+    pub sensor: Vec<Coords>,
     #[arg(long, value_enum, default_value = "pt")]
     pub method: Method,
     /// Samples per point (default: 64 × the scene's spp).
@@ -35,9 +63,10 @@ pub struct ProbeArgs {
     pub spp: Option<u32>,
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Default: the scene's (2D), L_s (3D), irradiance with `--sensor`.
     #[arg(long, value_enum)]
-    pub quantity: Option<QuantityArg>,
-    /// Outgoing direction ω_o of L_s in degrees.
+    pub quantity: Option<ProbeQuantity>,
+    /// Outgoing direction ω_o of L_s in degrees (2D; in 3D L_s leaves towards the camera).
     #[arg(long, allow_hyphen_values = true)]
     pub omega_o: Option<f64>,
     /// Directions per light field (aware, unaware).
@@ -61,4 +90,30 @@ pub struct ProbeArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+}
+
+impl ProbeArgs {
+    /// The `--at` points of a 2D scene.
+    pub fn points2(&self) -> anyhow::Result<Vec<DVec2>> {
+        self.at
+            .iter()
+            .map(|c| Ok(DVec2::from_array(coords(c, "--at", "X,Y")?)))
+            .collect()
+    }
+
+    /// The `--at` points of a 3D scene.
+    pub fn points3(&self) -> anyhow::Result<Vec<DVec3>> {
+        self.at
+            .iter()
+            .map(|c| Ok(DVec3::from_array(coords(c, "--at", "X,Y,Z")?)))
+            .collect()
+    }
+}
+
+/// Exactly N numbers, else an error naming the option and the expected form.
+pub fn coords<const N: usize>(c: &Coords, flag: &str, form: &str) -> anyhow::Result<[f64; N]> {
+    c.values
+        .as_slice()
+        .try_into()
+        .map_err(|_| anyhow::anyhow!("{flag} {}: expected {N} numbers {form}, got {}", c.text, c.values.len()))
 }

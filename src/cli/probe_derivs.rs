@@ -1,7 +1,7 @@
 //! `volcache probe --method aware|unaware|reference`: L_s with gradient and Hessian
 //! (and the Hessian's eigen-decomposition) per part.
 
-use super::common::{check_angle, check_count, check_range, check_spp, load_scene};
+use super::common::{check_angle, check_count, check_range, check_spp};
 use super::probe_args::{Method, ProbeArgs};
 use glam::DVec2;
 use serde::Serialize;
@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use volcache::core::space::{D2, Space};
 use volcache::core::taylor::Taylor2;
 use volcache::core::taylor_rgb::TaylorRgb;
+use volcache::flatland::scene::Scene;
 use volcache::limits;
 use volcache::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
 use volcache::pipeline::path::Settings;
@@ -72,8 +73,7 @@ pub struct DerivOut {
     pub seconds: f64,
 }
 
-pub fn run(a: &ProbeArgs) -> anyhow::Result<ExitCode> {
-    let scene = load_scene(a.scene.as_deref())?;
+pub fn run(a: &ProbeArgs, scene: &Scene) -> anyhow::Result<ExitCode> {
     let r = &scene.desc.render;
     check_count("--rays", a.rays as u64, 1 << 20)?;
     anyhow::ensure!(a.rays >= 3, "--rays must be at least 3");
@@ -115,9 +115,9 @@ pub fn run(a: &ProbeArgs) -> anyhow::Result<ExitCode> {
     };
     let out = Outgoing::Direction(omega_o);
     let mut outs = Vec::new();
-    for &x in &a.at {
+    for x in a.points2()? {
         // A handle of its own: nothing cancels a probe (it takes a second).
-        let d = derivatives_at(&scene, x, out, method, &ps, &rs, &aw, seed, &Progress::new())?;
+        let d = derivatives_at(scene, x, out, method, &ps, &rs, &aw, seed, &Progress::new())?;
         outs.push(to_out(&d, a.method));
     }
     if a.json {

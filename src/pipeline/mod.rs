@@ -20,6 +20,7 @@ pub mod placement;
 pub mod probe;
 pub mod proxy;
 pub mod record;
+pub mod sensor;
 pub mod silhouette;
 #[cfg(test)]
 mod testing;

@@ -6,8 +6,8 @@
 //!   and the sky: emitters seen directly and light reflected by surfaces) and
 //!   **multiple** (light arriving at x from the medium itself);
 //! - fluence φ(x) = ∫ L_i(x, ω) dω, split the same way;
-//! - irradiance on a virtual sensor with normal n, ∫ L_i max(0, n·ω) dω (reflected
-//!   power);
+//! - irradiance at a point of a virtual sensor with normal n, ∫ L_i max(0, n·ω) dω
+//!   (reflected power; its mean over a sensor is [`super::sensor`]);
 //! - the radiance L_i(x, ω) along one ray (camera pixels).
 //!
 //! Paths use free-flight sampling, NEE at every vertex (MIS with lobe sampling for
@@ -330,7 +330,10 @@ pub fn sample_query<W: World>(
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Estimate {
     pub mean: Parts,
+    /// Per part; `std_error.total()` would only bound the total's.
     pub std_error: Parts,
+    /// Of the total (the parts of one sample are correlated).
+    pub total_std_error: Rgb,
     pub samples: u64,
     pub rays: u64,
 }
@@ -340,6 +343,7 @@ pub struct Estimate {
 pub struct Accumulator {
     sum: [Rgb; 3],
     sum2: [Rgb; 3],
+    total2: Rgb,
     n: u64,
     rays: u64,
 }
@@ -350,6 +354,8 @@ impl Accumulator {
             self.sum[k] += v;
             self.sum2[k] += v * v;
         }
+        let t = p.total();
+        self.total2 += t * t;
         self.n += 1;
     }
 
@@ -357,13 +363,27 @@ impl Accumulator {
         self.rays += r;
     }
 
+    /// Add another accumulator's samples (merge in a fixed order for results that
+    /// do not depend on the thread count).
+    pub fn merge(&mut self, o: &Accumulator) {
+        for k in 0..3 {
+            self.sum[k] += o.sum[k];
+            self.sum2[k] += o.sum2[k];
+        }
+        self.total2 += o.total2;
+        self.n += o.n;
+        self.rays += o.rays;
+    }
+
     pub fn estimate(&self) -> Estimate {
         let n = self.n.max(1) as f64;
         let mean = self.sum.map(|s| s / n);
-        let se: [Rgb; 3] = std::array::from_fn(|k| {
-            let var = (self.sum2[k] / n - mean[k] * mean[k]).max(Rgb::ZERO) * (n / (n - 1.0).max(1.0));
+        let se_of = |mean: Rgb, sum2: Rgb| {
+            let var = (sum2 / n - mean * mean).max(Rgb::ZERO) * (n / (n - 1.0).max(1.0));
             (var / n).powf(0.5)
-        });
+        };
+        let se: [Rgb; 3] = std::array::from_fn(|k| se_of(mean[k], self.sum2[k]));
+        let total_std_error = se_of(mean[0] + mean[1] + mean[2], self.total2);
         let parts = |v: [Rgb; 3]| Parts {
             direct: v[0],
             single: v[1],
@@ -372,6 +392,7 @@ impl Accumulator {
         Estimate {
             mean: parts(mean),
             std_error: parts(se),
+            total_std_error,
             samples: self.n,
             rays: self.rays,
         }
