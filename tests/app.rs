@@ -1,30 +1,22 @@
 //! The workbench driven through egui_kittest (no window, no GPU): the UI's logic
 //! with real background computations kept tiny (a few thousand samples each).
 
+mod app_common;
+
+use app_common::{click_world, harness, press, step_until, workbench};
 use eframe::egui;
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use glam::DVec2;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use volcache::app::Workbench;
 use volcache::app::compare::{CompareKey, CompareParams, METHODS, compare_command, spawn_compare};
 use volcache::app::jobs::no_notify;
 use volcache::app::overlay::Overlay;
-use volcache::app::{Document, Workbench, install_fonts};
 use volcache::flatland::cached_field::CacheMethod;
 use volcache::flatland::field::FieldParams;
 use volcache::flatland::scene::Scene;
 use volcache::flatland::scene_desc::Quantity;
-
-/// The default scene with computations small enough for tests.
-fn workbench() -> Workbench {
-    let mut wb = Workbench::new(Document::default_scene());
-    let p = &mut wb.field_params;
-    (p.width, p.height, p.spp) = (24, 24, 2);
-    let m = &mut wb.method;
-    (m.rays, m.steps, m.ref_spp, m.grid, m.grid_rays) = (96, 4, 64, 4, 24);
-    wb
-}
 
 /// A comparison small enough for tests (12×12, a handful of records).
 fn tiny_compare(wb: &mut Workbench) {
@@ -35,44 +27,6 @@ fn tiny_compare(wb: &mut Workbench) {
         res: Some([12, 12]),
         ref_spp: 4,
     };
-}
-
-fn harness(wb: Workbench) -> Harness<'static, Workbench> {
-    Harness::builder()
-        .with_size([1280.0, 800.0])
-        .with_context_setup(install_fonts)
-        .build_ui_state(|ui, wb: &mut Workbench| wb.ui(ui), wb)
-}
-
-/// Step frames until `done` holds (30 s at most).
-fn step_until(h: &mut Harness<'_, Workbench>, what: &str, done: impl Fn(&Workbench) -> bool) {
-    let start = Instant::now();
-    while !done(h.state()) {
-        assert!(
-            start.elapsed() < Duration::from_secs(30),
-            "timed out waiting for {what}"
-        );
-        h.step();
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    h.step();
-}
-
-fn press(h: &Harness<'_, Workbench>, pos: egui::Pos2, pressed: bool) {
-    h.event(egui::Event::PointerButton {
-        pos,
-        button: egui::PointerButton::Primary,
-        pressed,
-        modifiers: egui::Modifiers::NONE,
-    });
-}
-
-fn click_world(h: &mut Harness<'_, Workbench>, p: DVec2) {
-    let pos = h.state().screen_pos(p).expect("the canvas was drawn");
-    h.hover_at(pos);
-    press(h, pos, true);
-    press(h, pos, false);
-    h.step();
 }
 
 #[test]

@@ -10,7 +10,7 @@ use super::scene_draw::draw_scene;
 use super::view::{Xform, zoom_about};
 use super::workbench::{DragKind, DragState, Workbench};
 use crate::core::metric::MetricParams;
-use crate::figure::{ColorScale, FieldStyle, field_to_rgba, viridis};
+use crate::figure::{ColorScale, FieldStyle, field_to_rgba, tonemap_grey, tonemap_scale, viridis};
 use crate::pipeline::world::World;
 use eframe::egui::{self, Align2, Color32, FontId, Mesh, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 use std::sync::Arc;
@@ -22,12 +22,13 @@ const BACKGROUND: Color32 = Color32::from_rgb(30, 30, 34);
 const COLORBAR_STRIP: f32 = 100.0;
 
 impl Workbench {
-    pub(super) fn field_style(&self) -> FieldStyle {
+    /// How the canvas maps the field to colours (exports use the same).
+    pub fn field_style(&self) -> FieldStyle {
         if self.display.false_color {
             FieldStyle::FalseColor { log: true, range: None }
         } else {
             FieldStyle::Tonemapped {
-                exposure: self.display.exposure,
+                exposure: self.exposure(),
             }
         }
     }
@@ -54,7 +55,7 @@ impl Workbench {
 
     /// Re-make the gradient overlay's image when the grid, method or part changed.
     fn update_gradient_texture(&mut self, ctx: &egui::Context) {
-        let Some(grid) = self.gradients.latest() else {
+        let Some(grid) = self.gradients.current() else {
             self.gradient_tex = None;
             return;
         };
@@ -92,9 +93,10 @@ impl Workbench {
         let rect = ui.available_rect_before_wrap();
         let resp = ui.allocate_rect(rect, Sense::click_and_drag());
         let scene = self.doc.scene().clone();
-        // The colour bar gets its own strip, so that it never hides the field.
-        let bar = if self.display.false_color { COLORBAR_STRIP } else { 0.0 };
-        let view_rect = rect.with_max_x(rect.max.x - bar);
+        self.canvas_rect = Some(rect);
+        // The colour bar gets its own strip, so that it never hides the field; the
+        // strip is there in every display mode, so switching never moves the field.
+        let view_rect = rect.with_max_x(rect.max.x - COLORBAR_STRIP);
         let mut xf = Xform::new(view_rect, scene.domain_min, scene.domain_max, &self.view);
 
         if resp.hovered() {
@@ -118,8 +120,34 @@ impl Workbench {
             painter.image(tex.id(), r, uv, Color32::WHITE);
         }
         self.shapes_drawn = self.draw_overlays(&painter, &xf);
-        if let Some(scale) = self.color_scale.filter(|_| self.display.false_color) {
-            draw_colorbar(&painter, rect, &scale, self.quantity_label());
+        if self.probe.is_none() {
+            hint(&painter, &xf, "click in the fog to place the probe");
+        } else if self.overlays.is_on(Overlay::Gradients) && self.gradient_tex.is_none() {
+            // The old scene's arrows are gone (Slot::current); say why none show.
+            hint(&painter, &xf, "gradient overlay: computing for the current scene…");
+        }
+        // Both displays explain their colours: viridis over log luminance, or the
+        // tone-mapped grey ramp from black to the value shown white.
+        let short = self.quantity_label().split(" (").next().unwrap_or_default();
+        if let Some(scale) = self.colorbar_scale() {
+            if self.display.false_color {
+                draw_colorbar(&painter, rect, &scale, short, &viridis);
+            } else {
+                let e = self.exposure();
+                let grey = |t: f64| tonemap_grey(scale.value_at(t), e);
+                // Per channel, not luminance: the quantity's symbol alone.
+                let symbol = short.split(' ').next().unwrap_or_default();
+                draw_colorbar(&painter, rect, &scale, &format!("{symbol}, linear"), &grey);
+            }
+        }
+    }
+
+    /// The scale the colour bar shows: false colour's, or for tone mapping the
+    /// values from black to white at the exposure in use (None before a field).
+    pub fn colorbar_scale(&self) -> Option<ColorScale> {
+        match self.display.false_color {
+            true => self.color_scale,
+            false => self.texture.as_ref().map(|_| tonemap_scale(self.exposure())),
         }
     }
 
@@ -281,8 +309,24 @@ impl Workbench {
     }
 }
 
-/// A vertical viridis bar at the canvas' right edge with labelled ticks.
-fn draw_colorbar(painter: &egui::Painter, canvas: Rect, scale: &ColorScale, label: &str) {
+/// A one-line note at the bottom of the field's view, on a dark backdrop.
+fn hint(painter: &egui::Painter, xf: &Xform, text: &str) {
+    let at = pos2(xf.rect.center().x, xf.rect.bottom() - 16.0);
+    let galley = painter.layout_no_wrap(text.into(), FontId::proportional(13.0), Color32::WHITE);
+    let r = Rect::from_center_size(at, galley.size() + vec2(14.0, 6.0));
+    painter.rect_filled(r, 4.0, Color32::from_black_alpha(170));
+    painter.galley(r.min + vec2(7.0, 3.0), galley, Color32::WHITE);
+}
+
+/// A vertical colour bar at the canvas' right edge with labelled ticks; `color`
+/// gives the colour at a position t ∈ [0, 1] up the bar.
+fn draw_colorbar(
+    painter: &egui::Painter,
+    canvas: Rect,
+    scale: &ColorScale,
+    label: &str,
+    color: &dyn Fn(f64) -> [u8; 3],
+) {
     let h = (canvas.height() * 0.6).clamp(120.0, 420.0);
     let bar = Rect::from_min_size(pos2(canvas.right() - 86.0, canvas.center().y - 0.5 * h), vec2(14.0, h));
     let back = Rect::from_min_max(
@@ -294,7 +338,7 @@ fn draw_colorbar(painter: &egui::Painter, canvas: Rect, scale: &ColorScale, labe
     let n = 64;
     for k in 0..n {
         let (t0, t1) = (k as f32 / n as f32, (k + 1) as f32 / n as f32);
-        let c = viridis(0.5 * (t0 + t1) as f64);
+        let c = color(0.5 * (t0 + t1) as f64);
         let r = Rect::from_x_y_ranges(bar.x_range(), bar.bottom() - t1 * h..=bar.bottom() - t0 * h);
         mesh.add_colored_rect(r, Color32::from_rgb(c[0], c[1], c[2]));
     }
@@ -318,11 +362,10 @@ fn draw_colorbar(painter: &egui::Painter, canvas: Rect, scale: &ColorScale, labe
             );
         }
     }
-    let short = label.split(" (").next().unwrap_or(label);
     painter.text(
         pos2(bar.left() - 4.0, bar.top() - 14.0),
         Align2::LEFT_CENTER,
-        short,
+        label,
         font,
         Color32::WHITE,
     );

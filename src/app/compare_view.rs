@@ -46,11 +46,11 @@ pub fn run_caption(r: &super::compare::MethodRun) -> String {
 impl Workbench {
     /// Re-make the comparison's textures when a new result landed or the exposure changed.
     pub(super) fn update_compare_textures(&mut self, ctx: &egui::Context) {
-        let Some(res) = self.compare.latest().cloned() else {
+        let Some(res) = self.compare.current().cloned() else {
             self.compare_tex = None;
             return;
         };
-        let exposure = self.display.exposure;
+        let exposure = self.exposure();
         if self.compare_tex.as_ref().is_some_and(|t| t.is_for(&res, exposure)) {
             return;
         }
@@ -64,7 +64,7 @@ impl Workbench {
 
     /// The record overlay's shapes on the canvas (the overlay method's records).
     pub(super) fn record_overlay_shapes(&self, xf: &Xform) -> Vec<egui::Shape> {
-        let Some(res) = self.compare.latest() else {
+        let Some(res) = self.compare.current() else {
             return vec![];
         };
         let Some(run) = res.run(self.overlay_method) else {
@@ -76,7 +76,7 @@ impl Workbench {
 
     /// The error overlay's texture and range (the overlay method's error map).
     pub(super) fn error_overlay(&self) -> Option<(&egui::TextureHandle, (f64, f64))> {
-        let res = self.compare.latest()?;
+        let res = self.compare.current()?;
         let k = res.runs.iter().position(|r| r.method == self.overlay_method)?;
         let t = self.compare_tex.as_ref()?;
         Some((t.errors.get(k)?, t.error_range))
@@ -194,7 +194,7 @@ impl Workbench {
             "{}×{}, equal cache count: {} records of {} rays ({} steps); reference {} spp",
             key.fp.width, key.fp.height, p.caches, p.rays, p.steps, p.ref_spp
         ));
-        let Some(res) = self.compare.latest().cloned() else {
+        let Some(res) = self.compare.current().cloned() else {
             ui.horizontal(|ui| {
                 ui.spinner();
                 ui.label("computing the reference…");

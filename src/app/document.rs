@@ -2,27 +2,47 @@
 //! load and save. Every change goes through [`Scene::from_desc`] — the command
 //! line's validation — and an invalid change is refused, so the document always
 //! holds a valid scene (errors are returned for the UI to show).
+//!
+//! An undo step remembers which file its scene came from, so undoing past a load
+//! brings back the previous file's path with its scene: the path shown, the title
+//! and what Save writes always belong to the scene on screen (issue 15: Save once
+//! overwrote the newly loaded file with the previous scene).
 
 use crate::flatland::scene::{Scene, SceneError};
 use crate::flatland::scene_desc::SceneDesc;
+use crate::flatland::shipped::{embedded_name, embedded_source};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Undo steps kept.
 const UNDO_LIMIT: usize = 256;
 
+/// One undo or redo step: a scene and the file it belongs to.
+#[derive(Clone)]
+struct Snapshot {
+    desc: SceneDesc,
+    /// The name errors use (`Scene::source`).
+    source: String,
+    path: Option<PathBuf>,
+    /// Which load this scene descends from (see `Document::loaded`).
+    loaded: u64,
+}
+
 pub struct Document {
     scene: Arc<Scene>,
-    /// Where the scene was loaded from or saved to (None: the embedded default).
+    /// Where the scene was loaded from or saved to (None: embedded, never saved).
     path: Option<PathBuf>,
-    undo: Vec<SceneDesc>,
-    redo: Vec<SceneDesc>,
+    undo: Vec<Snapshot>,
+    redo: Vec<Snapshot>,
+    /// Counts loads: restoring a step of another load switches the file back.
+    loaded: u64,
     /// Edits with the same key in a row (one drag, one slider gesture) make one
     /// undo step; [`Document::end_gesture`] closes it.
     gesture: Option<String>,
     /// Bumps on every change of the scene: jobs key on it.
     revision: u64,
-    /// Bumps when a different scene is loaded (the app resets its render settings).
+    /// Bumps when a different scene is loaded, or undo/redo crosses a load (the app
+    /// resets its render settings and shows the restored file's path).
     generation: u64,
     /// Changed since loaded or saved.
     dirty: bool,
@@ -35,6 +55,7 @@ impl Document {
             path,
             undo: Vec::new(),
             redo: Vec::new(),
+            loaded: 0,
             gesture: None,
             revision: 0,
             generation: 0,
@@ -83,9 +104,8 @@ impl Document {
     pub fn stem(&self) -> String {
         self.path.as_deref().and_then(|p| p.file_stem()).map_or_else(
             || {
-                crate::flatland::scene::DEFAULT_SCENE_NAME
-                    .trim_end_matches(".json")
-                    .to_string()
+                let name = embedded_name(&self.scene.source).unwrap_or(crate::flatland::scene::DEFAULT_SCENE_NAME);
+                name.trim_end_matches(".json").to_string()
             },
             |s| s.to_string_lossy().into_owned(),
         )
@@ -96,8 +116,17 @@ impl Document {
         self.revision += 1;
     }
 
+    fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            desc: self.scene.desc.clone(),
+            source: self.scene.source.clone(),
+            path: self.path.clone(),
+            loaded: self.loaded,
+        }
+    }
+
     fn push_undo(&mut self) {
-        self.undo.push(self.scene.desc.clone());
+        self.undo.push(self.snapshot());
         if self.undo.len() > UNDO_LIMIT {
             self.undo.remove(0);
         }
@@ -136,17 +165,22 @@ impl Document {
         !self.redo.is_empty()
     }
 
-    fn restore(&mut self, desc: SceneDesc) {
+    fn restore(&mut self, s: Snapshot) {
         // Every stored description was valid when stored.
-        let scene = Scene::from_desc(desc, &self.scene.source).expect("undo states are valid");
+        let scene = Scene::from_desc(s.desc, &s.source).expect("undo states are valid");
         self.install(scene);
+        if s.loaded != self.loaded {
+            // Across a load: the scene's own file comes back with it.
+            self.generation += 1;
+        }
+        (self.path, self.loaded) = (s.path, s.loaded);
         self.dirty = true;
     }
 
     pub fn undo(&mut self) -> bool {
         self.end_gesture();
         let Some(prev) = self.undo.pop() else { return false };
-        self.redo.push(self.scene.desc.clone());
+        self.redo.push(self.snapshot());
         self.restore(prev);
         true
     }
@@ -154,7 +188,7 @@ impl Document {
     pub fn redo(&mut self) -> bool {
         self.end_gesture();
         let Some(next) = self.redo.pop() else { return false };
-        self.undo.push(self.scene.desc.clone());
+        self.undo.push(self.snapshot());
         self.restore(next);
         true
     }
@@ -167,9 +201,16 @@ impl Document {
         self.push_undo();
         self.install(scene);
         self.path = path;
+        self.loaded += 1;
         self.generation += 1;
         self.dirty = false;
         Ok(())
+    }
+
+    /// Load a scene shipped in the binary (`flatland::shipped`): it has no file, so
+    /// Save asks for one.
+    pub fn load_embedded(&mut self, name: &str, json: &str) -> Result<(), SceneError> {
+        self.load_json(json, &embedded_source(name), None)
     }
 
     /// Load a scene file; on error the current scene stays.
@@ -191,10 +232,17 @@ impl Document {
 
     /// Write the scene to `path` (atomically) and make it the document's path.
     pub fn save(&mut self, path: &Path) -> anyhow::Result<()> {
-        crate::output::write_atomic(path, self.to_json().as_bytes())?;
+        self.write_copy(path)?;
         self.path = Some(path.to_path_buf());
         self.dirty = false;
         Ok(())
+    }
+
+    /// Write the scene to `path` (atomically), leaving the document's own file as it
+    /// is: "copy as command" needs the edited scene on disk without Save then
+    /// writing to a file the user never named.
+    pub fn write_copy(&self, path: &Path) -> anyhow::Result<()> {
+        crate::output::write_atomic(path, self.to_json().as_bytes())
     }
 }
 
@@ -265,5 +313,34 @@ mod tests {
         assert_eq!(e.generation(), 1);
         assert!(e.undo(), "loading is undoable");
         assert_eq!(e.desc(), &before);
+    }
+
+    #[test]
+    fn undo_past_a_load_brings_back_the_previous_file_with_its_scene() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.json"), dir.path().join("b.json"));
+        let b_json = crate::flatland::scene::DEFAULT_SCENE_JSON.replace("\"spp\": 128", "\"spp\": 3");
+        std::fs::write(&a, crate::flatland::scene::DEFAULT_SCENE_JSON).unwrap();
+        std::fs::write(&b, &b_json).unwrap();
+        let mut d = Document::default_scene();
+        d.load_file(&a).unwrap();
+        d.edit("g", |s| s.medium.as_mut().unwrap().g = 0.4).unwrap();
+        let edited_a = d.desc().clone();
+        d.load_file(&b).unwrap();
+        let (b_desc, generation) = (d.desc().clone(), d.generation());
+        assert!(d.undo());
+        assert_eq!((d.desc(), d.path()), (&edited_a, Some(a.as_path())));
+        assert_eq!(d.generation(), generation + 1, "the app resets to A's settings");
+        assert_eq!(d.scene().source, a.display().to_string());
+        assert!(d.undo(), "A's own edit");
+        assert_eq!(d.path(), Some(a.as_path()));
+        assert_eq!(d.generation(), generation + 1, "no load crossed");
+        assert!(d.redo() && d.redo());
+        assert_eq!((d.desc(), d.path()), (&b_desc, Some(b.as_path())));
+        // Writing a copy leaves the document's file alone.
+        let copy = dir.path().join("copy.json");
+        d.write_copy(&copy).unwrap();
+        assert_eq!(d.path(), Some(b.as_path()));
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), b_json);
     }
 }

@@ -12,6 +12,10 @@ use crate::pipeline::world::DirectLight;
 use eframe::egui::{self, Align2, Color32, FontId, Pos2, RichText, Sense, Shape, Stroke, Vec2, pos2, vec2};
 use glam::DVec2;
 
+/// What the inspector says before there is a probe.
+pub const PROBE_HINT: &str = "Click in the fog to place the probe: its incoming light field, proxy \
+     elements, and L_s with gradient and Hessian by each method appear here. Drag it to move it.";
+
 const SURFACE: Color32 = Color32::from_rgb(255, 196, 46);
 const MEDIUM: Color32 = Color32::from_rgb(140, 205, 255);
 
@@ -21,7 +25,11 @@ fn num(v: f64) -> String {
 
 impl Workbench {
     pub(super) fn inspector(&mut self, ui: &mut egui::Ui) {
-        let Some(at) = self.probe else { return };
+        let Some(at) = self.probe else {
+            ui.heading("Probe");
+            ui.label(PROBE_HINT);
+            return;
+        };
         ui.horizontal(|ui| {
             ui.heading("Probe");
             ui.label(format!("at ({:.4}, {:.4})", at.x, at.y));
@@ -31,9 +39,15 @@ impl Workbench {
         });
         match self.probe_result().cloned() {
             None => {
+                // An older result is never shown for the current scene (Slot::current).
+                let what = if self.probe_job.latest().is_some() {
+                    "recomputing for the changed scene or settings"
+                } else {
+                    "capturing the light field"
+                };
                 ui.horizontal(|ui| {
                     ui.spinner();
-                    ui.label(format!("capturing the light field ({} rays)…", self.method.rays));
+                    ui.label(format!("{what} ({} rays)…", self.method.rays));
                 });
             }
             Some(p) => {

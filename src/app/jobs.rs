@@ -263,6 +263,10 @@ pub struct Slot<K, T> {
     key: Option<K>,
     job: Option<Job<T>>,
     latest: Option<T>,
+    /// `latest` came from the job of the current key (false from the moment the
+    /// key changes until the new job delivers): results of an older scene or
+    /// older parameters must not pass for the current ones.
+    fresh: bool,
     /// How many jobs were started (tests and the status bar read it).
     pub starts: u64,
 }
@@ -273,6 +277,7 @@ impl<K, T> Default for Slot<K, T> {
             key: None,
             job: None,
             latest: None,
+            fresh: false,
             starts: 0,
         }
     }
@@ -290,6 +295,7 @@ impl<K: PartialEq, T: Send + 'static> Slot<K, T> {
         }
         self.job = Some(spawn());
         self.key = Some(key);
+        self.fresh = false;
         self.starts += 1;
         true
     }
@@ -301,6 +307,7 @@ impl<K: PartialEq, T: Send + 'static> Slot<K, T> {
             j.cancel();
         }
         self.key = None;
+        self.fresh = false;
         if clear_result {
             self.latest = None;
         }
@@ -322,6 +329,7 @@ impl<K: PartialEq, T: Send + 'static> Slot<K, T> {
             self.latest = Some(r);
             any = true;
         }
+        self.fresh |= any;
         any
     }
 
@@ -333,8 +341,15 @@ impl<K: PartialEq, T: Send + 'static> Slot<K, T> {
         self.job.as_ref()
     }
 
+    /// The latest result, whichever key it was computed for (the field shows its
+    /// last level while the next scene's first level computes).
     pub fn latest(&self) -> Option<&T> {
         self.latest.as_ref()
+    }
+
+    /// The latest result if it belongs to the current key, else None.
+    pub fn current(&self) -> Option<&T> {
+        self.latest.as_ref().filter(|_| self.fresh)
     }
 
     /// The running job, if any.
@@ -425,8 +440,34 @@ mod tests {
         wait(slot.job().unwrap());
         assert!(slot.update());
         assert_eq!((slot.latest(), slot.is_done()), (Some(&5), true));
+        assert_eq!(slot.current(), Some(&5));
         slot.reset(false);
         assert_eq!((slot.key(), slot.latest()), (None, Some(&5)));
+        assert_eq!(slot.current(), None, "no key: nothing is current");
+    }
+
+    #[test]
+    fn a_result_of_an_older_key_is_not_current() {
+        let one = |v: u32| {
+            move || {
+                Job::spawn("one", Priority::Interactive, no_notify(), move |r| {
+                    r.send(v);
+                    Ok(())
+                })
+            }
+        };
+        let mut slot: Slot<u32, u32> = Slot::default();
+        slot.ensure(1, one(10));
+        wait(slot.job().unwrap());
+        slot.update();
+        assert_eq!(slot.current(), Some(&10));
+        slot.ensure(2, || endless(no_notify()));
+        slot.update();
+        assert_eq!((slot.latest(), slot.current()), (Some(&10), None));
+        slot.ensure(3, one(30));
+        wait(slot.job().unwrap());
+        slot.update();
+        assert_eq!(slot.current(), Some(&30));
     }
 
     #[test]

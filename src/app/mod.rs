@@ -4,6 +4,7 @@
 //! state logic (scene edits, undo, scheduling) lives apart from the widgets.
 //!
 //! - [`document`]: the edited scene, validation, undo/redo, load/save;
+//!   [`open_dialog`], [`open_window`]: "Open…" (shipped scenes, a file browser);
 //!   [`edit`]: picking and dragging handles, adding and deleting items;
 //! - [`jobs`]: background jobs and the cancel-and-restart policy ([`jobs::Slot`]);
 //!   [`compute`]: what the jobs compute (field levels, probe, reference, gradients);
@@ -12,7 +13,7 @@
 //! - [`workbench`]: state and per-frame scheduling; [`canvas`], [`overlay`],
 //!   [`scene_draw`], [`view`]: the canvas; [`inspector`], [`readout`]: the probe
 //!   inspector; [`panels`], [`scene_panel`], [`toolbar`]: side panel, status bar,
-//!   toolbar and shortcuts;
+//!   toolbar and shortcuts; [`layout`]: how the panels give way to the canvas;
 //!   [`command`]: "copy as command".
 
 pub mod canvas;
@@ -26,6 +27,9 @@ pub mod edit;
 pub mod frame_stats;
 pub mod inspector;
 pub mod jobs;
+pub mod layout;
+pub mod open_dialog;
+pub mod open_window;
 pub mod overlay;
 pub mod panels;
 pub mod readout;

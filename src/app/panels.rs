@@ -10,19 +10,6 @@ use crate::output::write_png;
 use eframe::egui::{self, Color32, DragValue, RichText};
 use std::path::{Path, PathBuf};
 
-/// Scene files offered in the "Open" menu: `flatland_scenes/*.json` if present.
-fn scene_files() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir("flatland_scenes")
-        .map(|d| {
-            d.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "json"))
-                .collect()
-        })
-        .unwrap_or_default();
-    v.sort();
-    v
-}
-
 impl Workbench {
     pub(super) fn controls(&mut self, ui: &mut egui::Ui) {
         ui.add_space(4.0);
@@ -57,6 +44,20 @@ impl Workbench {
         }
     }
 
+    /// Save to the file named in the file field (never to a name the app made up:
+    /// an embedded scene has none until the user types one).
+    pub fn save_scene(&mut self) {
+        let p = PathBuf::from(self.scene_path.trim());
+        if p.as_os_str().is_empty() {
+            self.error("type a file name to save the scene to");
+            return;
+        }
+        match self.doc.save(&p) {
+            Ok(()) => self.info(format!("saved {}", p.display())),
+            Err(e) => self.error(format!("saving {}: {e:#}", p.display())),
+        }
+    }
+
     fn file_section(&mut self, ui: &mut egui::Ui) {
         ui.label(RichText::new(&self.doc.desc().description).weak());
         ui.horizontal(|ui| {
@@ -71,26 +72,10 @@ impl Workbench {
                 self.load_scene(&p);
             }
             if ui.button("Save").clicked() {
-                let p = PathBuf::from(self.scene_path.trim());
-                match self.doc.save(&p) {
-                    Ok(()) => self.info(format!("saved {}", p.display())),
-                    Err(e) => self.error(format!("saving {}: {e:#}", p.display())),
-                }
+                self.save_scene();
             }
-            egui::ComboBox::from_id_salt("open_builtin")
-                .selected_text("Open…")
-                .show_ui(ui, |ui| {
-                    for p in scene_files() {
-                        let name = p
-                            .file_name()
-                            .map_or(String::new(), |n| n.to_string_lossy().into_owned());
-                        if ui.selectable_label(false, name).clicked() {
-                            self.load_scene(&p);
-                        }
-                    }
-                })
-                .response
-                .accessible_name("open a scene of flatland_scenes/");
+            ui.toggle_value(&mut self.open_dialog.open, "Open…")
+                .on_hover_text("the shipped scenes, or a scene file from any folder");
         });
     }
 
@@ -127,12 +112,24 @@ impl Workbench {
             ui.add(DragValue::new(&mut p.seed)).labelled_by(l.id);
         });
         ui.add(egui::Slider::new(&mut p.omega_o_deg, -180.0..=180.0).text("ω_o (deg)"));
-        ui.horizontal(|ui| {
-            ui.checkbox(&mut self.display.false_color, "false colour (log)");
-            ui.add_enabled(
-                !self.display.false_color,
-                egui::Slider::new(&mut self.display.exposure, -12.0..=12.0).text("exposure"),
-            );
+        ui.checkbox(&mut self.display.false_color, "false colour (log)");
+        ui.add_enabled_ui(!self.display.false_color, |ui| {
+            ui.horizontal(|ui| {
+                let mut auto = self.display.auto_exposure;
+                let r = ui.checkbox(&mut auto, "auto exposure").on_hover_text(format!(
+                    "the brightest {:.0}% of the field's pixels just reach white",
+                    100.0 * (1.0 - crate::figure::AUTO_EXPOSURE_PERCENTILE)
+                ));
+                if r.changed() {
+                    // Manual from where auto was: the image does not jump.
+                    self.display.exposure = self.exposure();
+                    self.display.auto_exposure = auto;
+                }
+                // While automatic, the slider shows the exposure in use.
+                let mut shown = self.exposure();
+                let value = if auto { &mut shown } else { &mut self.display.exposure };
+                ui.add_enabled(!auto, egui::Slider::new(value, -40.0..=40.0).text("stops"));
+            });
         });
     }
 
@@ -196,8 +193,8 @@ impl Workbench {
             "out/{}_edited.json",
             self.doc.stem().trim_end_matches("_edited")
         ));
-        self.doc.save(&p)?;
-        self.scene_path = p.display().to_string();
+        // A copy for the command only: the document keeps its own file for Save.
+        self.doc.write_copy(&p)?;
         Ok(Some(p.display().to_string()))
     }
 
@@ -207,7 +204,7 @@ impl Workbench {
         Ok(field_command(
             scene.as_deref(),
             &self.field_params,
-            self.display.exposure,
+            self.exposure(),
             self.display.false_color,
             &self.export_path,
         ))
@@ -274,7 +271,7 @@ impl Workbench {
 
     pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
         let mut cancel = [false; 5];
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             cancel[0] = job_status(ui, "field", self.field.job());
             cancel[1] = job_status(ui, "probe", self.probe_job.job());
             cancel[2] = job_status(ui, "reference", self.reference.job());

@@ -1,4 +1,5 @@
-//! The toolbar (title, undo/redo, view, overlay toggles) and keyboard shortcuts.
+//! The toolbar (title, undo/redo, view, overlay toggles, compare view, which side
+//! panels show) and keyboard shortcuts.
 
 use super::overlay::Overlay;
 use super::view::ViewState;
@@ -41,7 +42,9 @@ impl Workbench {
     }
 
     pub(super) fn toolbar(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
+        // Wrapped: in a narrow window the last buttons go to a second row instead
+        // of off-screen.
+        ui.horizontal_wrapped(|ui| {
             let dirty = if self.doc.is_dirty() { " (edited)" } else { "" };
             ui.strong(format!("volcache workbench: {}{dirty}", self.doc.stem()));
             ui.separator();
@@ -63,6 +66,11 @@ impl Workbench {
             }
             ui.separator();
             ui.toggle_value(&mut self.show_compare, "Compare view");
+            ui.separator();
+            ui.toggle_value(&mut self.show_controls, "Side panel")
+                .on_hover_text("show or hide the scene, field and method controls");
+            ui.toggle_value(&mut self.show_inspector, "Inspector")
+                .on_hover_text("show or hide the probe inspector");
         });
     }
 }

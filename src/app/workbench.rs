@@ -11,6 +11,7 @@ use super::compute::{
 use super::document::Document;
 use super::edit::{Handle, Selection};
 use super::jobs::{Notify, Slot, no_notify};
+use super::layout::{CONTROLS_WIDTH, INSPECTOR_WIDTH, panel_max_widths};
 use super::overlay::{Overlay, Overlays};
 use super::view::{ViewState, Xform};
 use crate::figure::{ColorScale, RecordColor};
@@ -29,7 +30,10 @@ use std::time::{Duration, Instant};
 pub struct Display {
     /// Log luminance through viridis with a colour bar, else tone-mapped RGB.
     pub false_color: bool,
-    /// Stops, tone-mapped display only.
+    /// Tone mapping takes its exposure from the field (`figure::auto_exposure`),
+    /// else from `exposure`.
+    pub auto_exposure: bool,
+    /// Stops, tone-mapped display without automatic exposure.
     pub exposure: f64,
 }
 
@@ -90,6 +94,11 @@ pub struct Workbench {
     pub gradient_aware: bool,
     pub probe: Option<DVec2>,
     pub selection: Option<Selection>,
+    /// The side panels are shown (the toolbar's toggles; small windows hide them).
+    pub show_controls: bool,
+    pub show_inspector: bool,
+    /// "Open…": shipped scenes and a file browser.
+    pub open_dialog: super::open_dialog::OpenDialog,
     pub view: ViewState,
     /// Compute the reference at the probe (on demand), and keep doing so as it moves.
     pub want_reference: bool,
@@ -111,12 +120,16 @@ pub struct Workbench {
     pub(super) compare_out: String,
     pub(super) texture: Option<(egui::TextureHandle, (usize, Display))>,
     pub(super) color_scale: Option<ColorScale>,
+    /// The automatic exposure of the field level (by address) it was computed for.
+    auto_stops: std::cell::Cell<Option<(usize, f64)>>,
     /// The gradient overlay's texture, its key (grid, aware?, part) and arrows.
     pub(super) gradient_tex: Option<(egui::TextureHandle, (usize, bool, Part), super::overlay::GradientView)>,
     pub message: Option<Message>,
     pub(super) drag: Option<DragState>,
     pub(super) hovered: Option<Handle>,
     pub(super) last_xf: Option<Xform>,
+    /// The canvas' rectangle last frame (the colour bar's strip included).
+    pub(super) canvas_rect: Option<egui::Rect>,
     pub(super) scene_path: String,
     pub(super) export_path: String,
     /// Shapes the canvas drew last frame (tests check overlays through it).
@@ -138,6 +151,7 @@ impl Workbench {
         Workbench {
             display: Display {
                 false_color: false,
+                auto_exposure: true,
                 exposure: scene.desc.render.exposure,
             },
             field_params,
@@ -146,6 +160,9 @@ impl Workbench {
             gradient_aware: true,
             probe: None,
             selection: None,
+            show_controls: true,
+            show_inspector: true,
+            open_dialog: Default::default(),
             view: ViewState::default(),
             want_reference: false,
             auto_reference: false,
@@ -162,11 +179,13 @@ impl Workbench {
             compare_out: "out/compare".into(),
             texture: None,
             color_scale: None,
+            auto_stops: std::cell::Cell::new(None),
             gradient_tex: None,
             message: None,
             drag: None,
             hovered: None,
             last_xf: None,
+            canvas_rect: None,
             scene_path,
             export_path,
             shapes_drawn: 0,
@@ -214,9 +233,10 @@ impl Workbench {
         }
     }
 
-    /// The latest comparison (possibly partial: reference first, then each method).
+    /// The latest comparison of the current key (possibly partial: reference first,
+    /// then each method); None while a changed scene or parameter recomputes it.
     pub fn compare_result(&self) -> Option<&Arc<CompareResult>> {
-        self.compare.latest()
+        self.compare.current()
     }
 
     /// The comparison of the current key has every method.
@@ -257,6 +277,24 @@ impl Workbench {
         self.field.latest()
     }
 
+    /// The exposure the field is tone-mapped with (stops): the shown level's
+    /// automatic exposure, or the slider's. Exports and the copied command use it.
+    pub fn exposure(&self) -> f64 {
+        let level = self.field.latest().filter(|_| self.display.auto_exposure);
+        let Some(level) = level else {
+            return self.display.exposure;
+        };
+        let key = Arc::as_ptr(level) as usize;
+        match self.auto_stops.get() {
+            Some((k, e)) if k == key => e,
+            _ => {
+                let e = crate::figure::auto_exposure(&level.rendered.field);
+                self.auto_stops.set(Some((key, e)));
+                e
+            }
+        }
+    }
+
     /// The field job of the current parameters has delivered every level.
     pub fn field_converged(&self) -> bool {
         self.field.is_done()
@@ -278,7 +316,7 @@ impl Workbench {
     }
 
     pub fn probe_result(&self) -> Option<&Arc<ProbeResult>> {
-        self.probe_job.latest().filter(|r| Some(r.at) == self.probe)
+        self.probe_job.current().filter(|r| Some(r.at) == self.probe)
     }
 
     pub fn probe_done(&self) -> bool {
@@ -286,7 +324,7 @@ impl Workbench {
     }
 
     pub fn reference_result(&self) -> Option<&Arc<ReferenceResult>> {
-        self.reference.latest()
+        self.reference.current()
     }
 
     pub fn reference_done(&self) -> bool {
@@ -294,7 +332,7 @@ impl Workbench {
     }
 
     pub fn gradient_grid(&self) -> Option<&Arc<GradientGrid>> {
-        self.gradients.latest()
+        self.gradients.current()
     }
 
     /// The scene file field of the side panel.
@@ -305,6 +343,11 @@ impl Workbench {
     /// The PNG path of "Export PNG".
     pub fn export_path_mut(&mut self) -> &mut String {
         &mut self.export_path
+    }
+
+    /// The canvas' rectangle in the last frame (tests check the layout with it).
+    pub fn canvas_rect(&self) -> Option<egui::Rect> {
+        self.canvas_rect
     }
 
     /// The screen position of a world point in the last frame's canvas.
@@ -335,6 +378,9 @@ impl Workbench {
             self.gradients.reset(true);
             self.compare.reset(true);
             self.export_path = format!("out/{}_app.png", self.doc.stem());
+            // The file field shows the scene's own file (undo past a load brings
+            // back the previous one), so Save writes where the scene came from.
+            self.scene_path = self.doc.path().map_or(String::new(), |p| p.display().to_string());
         }
         let scene = self.doc.scene().clone();
         let rev = self.doc.revision();
@@ -433,16 +479,27 @@ impl Workbench {
         self.shortcuts(ui);
         egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
         egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
-        egui::Panel::left("controls")
-            .default_size(300.0)
-            .show(ui, |ui| egui::ScrollArea::vertical().show(ui, |ui| self.controls(ui)));
-        if self.probe.is_some() {
+        // The side panels give way to the canvas, scroll what does not fit, and stay
+        // in place whether or not there is a probe: placing one never moves the
+        // canvas under the pointer.
+        let width = ui.available_rect_before_wrap().width();
+        let (controls_max, inspector_max) = panel_max_widths(width, self.show_controls, self.show_inspector);
+        let scroll = || egui::ScrollArea::both().auto_shrink(false);
+        if self.show_controls {
+            egui::Panel::left("controls")
+                .default_size(CONTROLS_WIDTH)
+                .max_size(controls_max)
+                .show(ui, |ui| scroll().show(ui, |ui| self.controls(ui)));
+        }
+        if self.show_inspector {
             egui::Panel::right("inspector")
-                .default_size(410.0)
-                .show(ui, |ui| egui::ScrollArea::vertical().show(ui, |ui| self.inspector(ui)));
+                .default_size(INSPECTOR_WIDTH)
+                .max_size(inspector_max)
+                .show(ui, |ui| scroll().show(ui, |ui| self.inspector(ui)));
         }
         egui::CentralPanel::no_frame().show(ui, |ui| self.canvas(ui));
         self.compare_window(ui.ctx());
+        self.open_window(ui.ctx());
         // Restart what this frame's edits made stale now, not a frame later.
         self.tick();
 

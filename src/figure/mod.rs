@@ -5,7 +5,8 @@
 //! - [`overlay`]: the scene (segments, lights, medium outline) over a panel, through
 //!   a world → pixel [`View`].
 //! - [`colorbar`]: false-colour scales, ticks and the colour bar.
-//! - [`field_figure`](mod@field_figure): a radiance field as a finished figure.
+//! - [`field_figure`](mod@field_figure): a radiance field as a finished figure;
+//!   [`exposure`]: its automatic exposure and the tone-mapped grey scale.
 //! - [`gradient_color`](mod@gradient_color): gradients coloured by direction and log magnitude, and the
 //!   colour wheel explaining it.
 //! - [`gradient_figure`](mod@gradient_figure): the paper's gradient figure (panels per
@@ -25,6 +26,7 @@ pub mod colorbar;
 pub mod colormap;
 pub mod compose;
 pub mod error_map;
+pub mod exposure;
 pub mod field_figure;
 pub mod gradient_color;
 pub mod gradient_figure;
@@ -43,6 +45,7 @@ pub use colorbar::{ColorScale, Tick, colorbar_width, draw_colorbar};
 pub use colormap::{angle_color, srgb_encode, tonemap, viridis};
 pub use compose::{Cell, compose_grid};
 pub use error_map::{error_field, error_map_figure, shared_error_range};
+pub use exposure::{AUTO_EXPOSURE_PERCENTILE, auto_exposure, tonemap_grey, tonemap_scale};
 pub use field_figure::{
     FieldStyle, FigureOptions, INVALID_RGB, MappedField, NAN_RGB, field_color_scale, field_figure, field_figure_with,
     field_to_rgba, upscale_factor,

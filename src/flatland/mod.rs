@@ -12,4 +12,5 @@ pub mod medium;
 pub mod scene;
 pub mod scene_desc;
 mod scene_world;
+pub mod shipped;
 pub mod validate;

@@ -60,7 +60,7 @@ impl Scene {
 
     /// The embedded default scene.
     pub fn default_scene() -> Scene {
-        Self::from_json(DEFAULT_SCENE_JSON, &format!("<embedded {DEFAULT_SCENE_NAME}>"))
+        Self::from_json(DEFAULT_SCENE_JSON, &super::shipped::embedded_source(DEFAULT_SCENE_NAME))
             .expect("the embedded default scene is valid (tested)")
     }
 
