@@ -21,6 +21,7 @@ pub mod app;
 pub mod core;
 pub mod figure;
 pub mod flatland;
+pub mod limits;
 pub mod output;
 pub mod pipeline;
 pub mod progress;

@@ -1,5 +1,5 @@
 //! The checks shared by the 2D and 3D scene validators: every problem names the
-//! JSON path of its field and what is wrong.
+//! JSON path of its field and what is wrong. The ranges are [`crate::limits`].
 
 use crate::core::color::Color;
 
@@ -67,6 +67,7 @@ pub fn validated<T>(desc: T, file: &str, validate: impl FnOnce(&T) -> Vec<Proble
         }),
     }
 }
+use crate::limits::{self, MAX_COORD, zero_or_within};
 
 /// One problem with a scene: the JSON path of the field and what is wrong.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,6 +80,84 @@ pub struct Problem {
 #[derive(Default)]
 pub struct Checker {
     pub problems: Vec<Problem>,
+}
+
+/// A number as messages show it: plain when short, else in scientific notation.
+pub fn shown(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Euclidean length, computed without overflow or underflow for finite input.
+pub fn length<const N: usize>(v: [f64; N]) -> f64 {
+    let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if m == 0.0 || !m.is_finite() {
+        return m;
+    }
+    m * v.iter().map(|x| (x / m) * (x / m)).sum::<f64>().sqrt()
+}
+
+/// Distance between two points (see [`length`]).
+pub fn distance<const N: usize>(a: [f64; N], b: [f64; N]) -> f64 {
+    length(std::array::from_fn::<f64, N, _>(|k| a[k] - b[k]))
+}
+
+/// Bounds of a cloud of points, as the validators measure a scene's size, with
+/// the JSON path of the point farthest from the origin (named when it is too far).
+#[derive(Clone, Debug)]
+pub struct Extent<const N: usize> {
+    pub min: [f64; N],
+    pub max: [f64; N],
+    pub farthest: String,
+}
+
+impl<const N: usize> Extent<N> {
+    pub fn new() -> Self {
+        Extent {
+            min: [f64::INFINITY; N],
+            max: [f64::NEG_INFINITY; N],
+            farthest: String::new(),
+        }
+    }
+    /// Grow by `p` (ignored unless finite: its own check reports it).
+    pub fn grow(&mut self, p: [f64; N]) {
+        self.grow_named("", p);
+    }
+    /// Grow by `p`, the point at JSON path `path`.
+    pub fn grow_named(&mut self, path: &str, p: [f64; N]) {
+        if p.iter().all(|v| v.is_finite()) {
+            if p.iter().fold(0.0f64, |m, v| m.max(v.abs())) > self.reach() || self.farthest.is_empty() {
+                self.farthest = path.to_string();
+            }
+            for (k, &x) in p.iter().enumerate() {
+                self.min[k] = self.min[k].min(x);
+                self.max[k] = self.max[k].max(x);
+            }
+        }
+    }
+    /// The diagonal (0 when empty).
+    pub fn size(&self) -> f64 {
+        if self.min[0] > self.max[0] {
+            return 0.0;
+        }
+        distance(self.min, self.max)
+    }
+    /// The largest |coordinate| (0 when empty).
+    pub fn reach(&self) -> f64 {
+        if self.min[0] > self.max[0] {
+            return 0.0;
+        }
+        (0..N).fold(0.0f64, |m, k| m.max(self.min[k].abs()).max(self.max[k].abs()))
+    }
+}
+
+impl<const N: usize> Default for Extent<N> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Checker {
@@ -96,66 +175,188 @@ impl Checker {
         v.is_finite()
     }
 
-    /// Every coordinate finite (each bad one reported with its index).
-    pub fn point<const N: usize>(&mut self, path: &str, p: [f64; N]) -> bool {
-        (0..N).fold(true, |ok, k| self.finite(&format!("{path}[{k}]"), p[k]) & ok)
-    }
-
-    /// Finite and not the zero vector.
-    pub fn nonzero<const N: usize>(&mut self, path: &str, p: [f64; N]) -> bool {
-        if self.point(path, p) && p == [0.0; N] {
-            self.fail(path, "must not be the zero vector");
+    /// `v` finite and within `[lo, hi]`.
+    pub fn within(&mut self, path: &str, v: f64, (lo, hi): (f64, f64)) -> bool {
+        if !self.finite(path, v) {
+            return false;
+        }
+        if !(lo..=hi).contains(&v) {
+            self.fail(path, format!("must lie between {lo:e} and {hi:e}, got {v:e}"));
             return false;
         }
         true
     }
 
-    /// A colour: finite, not negative, at most `max` when given.
-    pub fn color(&mut self, path: &str, c: &Color, max: Option<f64>) {
+    /// Every coordinate finite and within ±[`MAX_COORD`] (each bad one reported
+    /// with its index).
+    pub fn point<const N: usize>(&mut self, path: &str, p: [f64; N]) -> bool {
+        (0..N).fold(true, |ok, k| {
+            let path = format!("{path}[{k}]");
+            let good = self.finite(&path, p[k]) && {
+                let inside = p[k].abs() <= MAX_COORD;
+                if !inside {
+                    self.fail(path, format!("must lie within ±{MAX_COORD:e}, got {:e}", p[k]));
+                }
+                inside
+            };
+            good & ok
+        })
+    }
+
+    /// A direction: finite, of length within [`limits::DIRECTION_LENGTH`] (it is
+    /// normalised).
+    pub fn direction<const N: usize>(&mut self, path: &str, d: [f64; N]) -> bool {
+        if !(0..N).fold(true, |ok, k| self.finite(&format!("{path}[{k}]"), d[k]) & ok) {
+            return false;
+        }
+        let (lo, hi) = limits::DIRECTION_LENGTH;
+        let len = length(d);
+        if len == 0.0 {
+            self.fail(path, "must not be the zero vector");
+            return false;
+        }
+        if !(lo..=hi).contains(&len) {
+            self.fail(
+                path,
+                format!("a direction must have a length between {lo:e} and {hi:e}, got {len:e}"),
+            );
+            return false;
+        }
+        true
+    }
+
+    /// `a` and `b` at least [`limits::MIN_SEPARATION`]·`size` apart.
+    pub fn apart<const N: usize>(&mut self, path: &str, a: [f64; N], b: [f64; N], size: f64, what: &str) -> bool {
+        let min = limits::MIN_SEPARATION * size;
+        let d = distance(a, b);
+        if d < min || d == 0.0 {
+            self.fail(
+                path,
+                format!(
+                    "{what}: {d:e} apart, less than {:e} of the scene size ({min:e})",
+                    limits::MIN_SEPARATION
+                ),
+            );
+            return false;
+        }
+        true
+    }
+
+    /// The scene's size (from `extent`; a size problem is reported at `path`) and
+    /// where it lies (a problem reported at the farthest point's path).
+    pub fn scene_size<const N: usize>(&mut self, path: &str, extent: &Extent<N>) -> bool {
+        let (size, reach) = (extent.size(), extent.reach());
+        if size < limits::MIN_SCENE_SIZE {
+            self.fail(
+                path,
+                format!(
+                    "the scene is {size:e} across; it must be at least {:e}",
+                    limits::MIN_SCENE_SIZE
+                ),
+            );
+            return false;
+        }
+        if reach > limits::MAX_SIZES_FROM_ORIGIN * size {
+            let at = if extent.farthest.is_empty() {
+                path
+            } else {
+                &extent.farthest
+            };
+            self.fail(
+                at,
+                format!(
+                    "the scene ({size:e} across) lies {reach:e} from the origin, more than {:e} of its sizes: \
+                     move it towards the origin so that f64 resolves its details",
+                    limits::MAX_SIZES_FROM_ORIGIN
+                ),
+            );
+            return false;
+        }
+        true
+    }
+
+    /// A colour's channels: finite, each 0 or within `range`.
+    fn channels(&mut self, path: &str, c: &Color, range: (f64, f64), what: &str) {
         for (i, &v) in c.0.iter().enumerate() {
             let p = format!("{path}[{i}]");
             if !self.finite(&p, v) {
                 continue;
             }
+            let (lo, hi) = range;
             if v < 0.0 {
                 self.fail(p, format!("must not be negative, got {v}"));
-            } else if let Some(m) = max.filter(|&m| v > m) {
-                self.fail(p, format!("must be at most {m}, got {v}"));
+            } else if v > hi {
+                self.fail(p, format!("must be at most {}, got {}", shown(hi), shown(v)));
+            } else if !zero_or_within(v, range) {
+                self.fail(
+                    p,
+                    format!("{what} must be 0 or at least {}, got {}", shown(lo), shown(v)),
+                );
             }
         }
     }
 
-    /// An axis-aligned box `{path}.min`–`{path}.max` with min < max in every coordinate.
-    pub fn bounds<const N: usize>(&mut self, path: &str, min: [f64; N], max: [f64; N]) -> bool {
+    /// Radiance, intensity or irradiance: 0 or within [`limits::RADIANCE`].
+    pub fn radiometric(&mut self, path: &str, c: &Color) {
+        self.channels(path, c, limits::RADIANCE, "a radiometric value");
+    }
+
+    /// A diffuse reflectance: 0 or within [10⁻²⁰, 1].
+    pub fn reflectance(&mut self, path: &str, c: &Color) {
+        self.channels(path, c, (limits::RADIANCE.0, 1.0), "a reflectance");
+    }
+
+    /// σ_a or σ_s: 0 or within [`limits::SIGMA`].
+    pub fn coefficient(&mut self, path: &str, c: &Color) {
+        self.channels(path, c, limits::SIGMA, "a coefficient");
+    }
+
+    /// An axis-aligned box `{path}.min`–`{path}.max`, each side at least
+    /// [`limits::MIN_SEPARATION`]·`size` (pass 0 before the size is known).
+    pub fn bounds<const N: usize>(&mut self, path: &str, min: [f64; N], max: [f64; N], size: f64) -> bool {
         let ok = self.point(&format!("{path}.min"), min) & self.point(&format!("{path}.max"), max);
         if ok && !(0..N).all(|k| min[k] < max[k]) {
             self.fail(format!("{path}.max"), "must be greater than min in every coordinate");
             return false;
         }
+        let side = (0..N).fold(f64::INFINITY, |m, k| m.min(max[k] - min[k]));
+        if ok && side < limits::MIN_SEPARATION * size {
+            self.fail(
+                format!("{path}.max"),
+                format!(
+                    "a side of {side:e} is less than {:e} of the scene size ({size:e})",
+                    limits::MIN_SEPARATION
+                ),
+            );
+            return false;
+        }
         ok
     }
 
-    /// Henyey–Greenstein g strictly inside (−1, 1).
+    /// Henyey–Greenstein g within ±[`limits::MAX_ABS_G`].
     pub fn hg_g(&mut self, path: &str, g: f64) {
-        if self.finite(path, g) && !(g > -1.0 && g < 1.0) {
-            self.fail(path, format!("must lie strictly between -1 and 1, got {g}"));
+        let m = limits::MAX_ABS_G;
+        if self.finite(path, g) && g.abs() > m {
+            self.fail(path, format!("must lie between -{m} and {m}, got {g}"));
         }
     }
 
     /// The common fields of a `render` block.
     pub fn render_block(&mut self, resolution: [u32; 2], spp: u32, max_depth: u32, exposure: f64) {
-        if resolution[0] == 0 || resolution[1] == 0 || resolution[0] > 16384 || resolution[1] > 16384 {
-            self.fail(
-                "render.resolution",
-                format!("must be between 1 and 16384 pixels per side, got {resolution:?}"),
-            );
+        if let Some(why) = limits::resolution_problem(resolution[0], resolution[1]) {
+            self.fail("render.resolution", why);
         }
-        if spp == 0 {
-            self.fail("render.spp", "must be at least 1");
+        for (path, v, max) in [
+            ("render.spp", spp, limits::MAX_SPP),
+            ("render.max_depth", max_depth, limits::MAX_DEPTH),
+        ] {
+            if v == 0 {
+                self.fail(path, "must be at least 1");
+            } else if v > max {
+                self.fail(path, format!("must be at most {max}, got {v}"));
+            }
         }
-        if max_depth == 0 {
-            self.fail("render.max_depth", "must be at least 1");
-        }
-        self.finite("render.exposure", exposure);
+        let e = limits::MAX_EXPOSURE;
+        self.within("render.exposure", exposure, (-e, e));
     }
 }

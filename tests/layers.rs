@@ -11,7 +11,7 @@ use std::path::Path;
 /// `study` (the experiment protocols) runs `flatland` and `volume` and writes
 /// through `output`; `figure` draws what it is handed; `app` and `cli` orchestrate.
 const LAYERS: [&[&str]; 7] = [
-    &["core", "progress"],
+    &["core", "progress", "limits"],
     &["pipeline", "scene_check"],
     &["flatland", "volume"],
     &["output", "study"],

@@ -86,7 +86,7 @@ fn errors_name_the_file_and_the_json_path() {
         ),
         (
             format!(r#"{{ {CAM}, "medium": {{"sigma_a": 0, "sigma_s": 1, "g": 1}} }}"#),
-            "medium.g: must lie strictly between",
+            "medium.g: must lie between -0.999 and 0.999",
         ),
         (
             format!(r#"{{ {CAM}, "medium": {{"sigma_a": 0, "sigma_s": 1, "region": {{"sphere": 1}}}} }}"#),

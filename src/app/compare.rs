@@ -152,6 +152,7 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
                 "compare: reference {}×{} @ {} spp",
                 rp.width, rp.height, rp.spp
             ));
+            // At full precision, as `figure compare` measures (its store keeps f64).
             let reference = render_field(&scene, &rp, r.progress())?;
             r.add_rays(reference.rays);
             let mut res = CompareResult {

@@ -179,7 +179,7 @@ pub fn run(b: DerivBench) -> anyhow::Result<ExitCode> {
                 k as u64,
                 &Progress::new(),
             )
-            .map_err(|_| anyhow::anyhow!("cancelled"))?;
+            .map_err(|_| anyhow::Error::from(volcache::progress::Cancelled))?;
             let capture_seconds = t.elapsed().as_secs_f64();
             let plain = time_eval(min_s, || derivatives::plain_estimate(&lf));
             let unaware = time_eval(min_s, || derivatives::unaware(&lf));

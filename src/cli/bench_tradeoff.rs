@@ -3,7 +3,7 @@
 //! placement re-run from scratch so its time is honest) and path tracing over
 //! samples per pixel; error against one reference field (cached on disk).
 
-use super::caches::{CacheArgs, field_params, reference, run_method};
+use super::caches::{CacheArgs, check_cache_args, field_params, reference, run_method};
 use super::common::{load_scene, scene_stem, wrote};
 use clap::Args;
 use serde::Serialize;
@@ -58,6 +58,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
+    check_cache_args(&a.cache, &fp)?;
     let (reference, ref_info) = reference(&scene, &fp, &a.cache)?;
     let progress = Progress::new();
     let mut points = Vec::new();

@@ -1,7 +1,10 @@
 //! `volcache caches`: reconstruct a scene's field from a radiance cache (ours or
 //! Jarosz et al. 2008) or by path tracing, and measure it against a reference.
 
-use super::common::{ProgressUi, load_scene, parse_res, scene_stem, wrote};
+use super::common::{
+    CACHES_BYTES_PER_PIXEL, ProgressUi, check_count, check_plan, check_range, check_spp, ensure_memory, exr_bytes,
+    load_scene, parse_res, png_bytes, scene_stem, write_outputs,
+};
 use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -10,11 +13,12 @@ use volcache::figure::{FieldStyle, field_figure};
 use volcache::flatland::cached_field::{CacheMethod, CacheSettings};
 use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::scene::Scene;
-use volcache::output::{write_exr, write_json, write_png};
+use volcache::limits;
+use volcache::output::OutputPlan;
 use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 use volcache::study::field_runs::{self, FieldMethod, MethodRun, cache_run, pt_run};
-use volcache::study::reference2d::{ReferenceInfo, reference_field};
+use volcache::study::reference2d::{ReferenceInfo, reference_field, reference_files};
 use volcache::study::seeds::reference_seed;
 
 /// Cache parameters shared by `caches`, `figure compare` and `bench tradeoff`.
@@ -118,31 +122,68 @@ struct Summary<'a> {
 /// The reference field of the options (`--ref-spp`, the reference's own seed),
 /// from the store in `--ref-cache` or rendered (with a progress bar) into it.
 pub fn reference(scene: &Scene, fp: &FieldParams, a: &CacheArgs) -> anyhow::Result<(Field, ReferenceInfo)> {
-    let ref_fp = FieldParams {
+    reference_field(scene, &reference_params(fp, a), &a.ref_cache, |label| {
+        ProgressUi::new(label, !a.quiet)
+    })
+}
+
+/// The reference's field parameters: `--ref-spp` samples, its own seed.
+fn reference_params(fp: &FieldParams, a: &CacheArgs) -> FieldParams {
+    FieldParams {
         spp: a.ref_spp,
         seed: reference_seed(a.seed),
         ..fp.clone()
-    };
-    reference_field(scene, &ref_fp, &a.ref_cache, |label| ProgressUi::new(label, !a.quiet))
+    }
+}
+
+/// The store's files for the reference of the options (outputs of any run that
+/// may render it).
+pub fn reference_outputs(scene: &Scene, fp: &FieldParams, a: &CacheArgs) -> Vec<PathBuf> {
+    reference_files(scene, &reference_params(fp, a), &a.ref_cache)
+}
+
+/// Check the options `caches`, `figure compare` and `bench tradeoff` share.
+pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
+    if let Some(eps) = a.eps {
+        check_range("--eps", eps, limits::EPS)?;
+    }
+    if let Some(k) = a.caches {
+        check_count("--caches", k as u64, (fp.width * fp.height) as u64)?;
+    }
+    check_count("--rays", a.rays as u64, 1 << 20)?;
+    check_count("--steps", a.steps as u64, 4096)?;
+    check_spp("--ref-spp", a.ref_spp, limits::MAX_SPP)?;
+    ensure_memory(fp.width * fp.height, CACHES_BYTES_PER_PIXEL, "the field")
 }
 
 pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
     let fp = field_params(&scene, &a.cache);
+    check_cache_args(&a.cache, &fp)?;
+    check_spp("--spp", a.spp, limits::MAX_SPP)?;
+    let mut plan = OutputPlan::new();
+    if let Some(s) = &a.scene {
+        plan.input("the scene", s);
+    }
+    for name in OUTPUTS {
+        plan.output(format!("--out {}", a.out.display()), &a.out.join(name));
+    }
+    for file in reference_outputs(&scene, &fp, &a.cache) {
+        plan.output("--ref-cache", &file);
+    }
+    check_plan(&plan)?;
+
     let (reference, ref_info) = reference(&scene, &fp, &a.cache)?;
     let ui = ProgressUi::new(&format!("{stem} {:?}", a.method), !a.cache.quiet);
-    let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &reference, &ui.progress);
+    let progress = ui.progress.clone();
+    let run = run_method(&scene, &fp, a.method, a.spp, &a.cache, &reference, &progress);
     ui.finish();
     let run = match run {
         Ok(run) => run,
-        Err(CountError::Cancelled(_)) => {
-            eprintln!("cancelled: no output written");
-            return Ok(ExitCode::from(130));
-        }
+        Err(CountError::Cancelled(c)) => return Err(c.into()),
         Err(e) => anyhow::bail!("--caches: {e}"),
     };
-    write_outputs(&a.out, &scene, &run, &reference)?;
     let e = run.errors.unwrap_or_default();
     eprintln!(
         "{:?}: {} records, {:.2} s (placement {:.2} s), {} rays; RMSE {:.4e}, relMSE {:.4e} (reference {} spp, rel. std error {:.2}%)",
@@ -165,22 +206,33 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         run: &run,
         reference: &ref_info,
     };
+    let files = output_files(&a.out, &scene, &run, &reference)?;
     let json = a.out.join("summary.json");
-    wrote(&json, write_json(&json, &summary))?;
-    Ok(ExitCode::SUCCESS)
+    write_outputs(files, Some((&json, serde_json::to_value(&summary)?)), &progress)
 }
 
-fn write_outputs(dir: &Path, scene: &Scene, run: &MethodRun, reference: &Field) -> anyhow::Result<()> {
+/// Every file `caches` may write into its folder (the summary last).
+const OUTPUTS: [&str; 5] = ["field.png", "field.exr", "error.png", "records.png", "summary.json"];
+
+fn output_files(
+    dir: &Path,
+    scene: &Scene,
+    run: &MethodRun,
+    reference: &Field,
+) -> anyhow::Result<Vec<(PathBuf, Vec<u8>)>> {
     let style = FieldStyle::Tonemapped {
         exposure: scene.desc.render.exposure,
     };
     let title = format!("{:?}: {} records", run.method, run.records);
     let png = dir.join("field.png");
-    wrote(
-        &png,
-        write_png(&png, &field_figure(&run.field, Some(scene), &style, Some(&title))),
-    )?;
     let exr = dir.join("field.exr");
-    wrote(&exr, write_exr(&exr, &run.field))?;
-    super::caches_figures::write_cache_figures(dir, scene, run, reference)
+    let mut files = vec![
+        (
+            png.clone(),
+            png_bytes(&png, &field_figure(&run.field, Some(scene), &style, Some(&title)))?,
+        ),
+        (exr.clone(), exr_bytes(&exr, &run.field)?),
+    ];
+    files.extend(super::caches_figures::cache_figures(dir, scene, run, reference)?);
+    Ok(files)
 }

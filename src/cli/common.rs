@@ -4,9 +4,12 @@ use anyhow::Context;
 use glam::DVec2;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::sync::{Arc, Mutex, Once};
 use std::time::Duration;
 use volcache::flatland::scene::Scene;
+use volcache::limits;
+use volcache::output::{OutputPlan, SetError, write_set};
 use volcache::progress::Progress;
 
 /// Load a scene file, or the embedded default scene when none is given.
@@ -29,30 +32,101 @@ pub fn scene_stem(path: Option<&Path>) -> String {
     )
 }
 
-/// Parse `WxH`.
+/// Parse `WxH` (within `limits::MAX_SIDE` per side and `limits::MAX_PIXELS`).
 pub fn parse_res(s: &str) -> Result<[u32; 2], String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
     let p = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("`{v}` in `{s}`: {e}"));
     let (w, h) = (p(w)?, p(h)?);
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("resolution must be between 1 and 16384 per side, got {w}x{h}"));
+    match limits::resolution_problem(w, h) {
+        Some(why) => Err(format!("resolution {why}")),
+        None => Ok([w, h]),
     }
-    Ok([w, h])
 }
 
-/// Parse `X,Y` as a finite point.
+/// Parse `X,Y` as a point within ±`limits::MAX_COORD`.
 pub fn parse_point(s: &str) -> Result<DVec2, String> {
     let (x, y) = s.split_once(',').ok_or_else(|| format!("expected X,Y, got `{s}`"))?;
     let p = |v: &str| {
-        v.trim()
+        let c = v
+            .trim()
             .parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| format!("`{v}` in `{s}` is not a finite number"))
+            .ok_or_else(|| format!("`{v}` in `{s}` is not a finite number"))?;
+        if c.abs() > limits::MAX_COORD {
+            return Err(format!("`{v}` in `{s}` lies beyond ±{:e}", limits::MAX_COORD));
+        }
+        Ok(c)
     };
     Ok(DVec2::new(p(x)?, p(y)?))
+}
+
+/// A count option within `1..=max`.
+pub fn check_count(flag: &str, v: u64, max: u64) -> anyhow::Result<()> {
+    anyhow::ensure!(v >= 1, "{flag} must be at least 1");
+    anyhow::ensure!(v <= max, "{flag} must be at most {max}, got {v}");
+    Ok(())
+}
+
+/// Samples per pixel (or per point) within `1..=max`.
+pub fn check_spp(flag: &str, v: u32, max: u32) -> anyhow::Result<()> {
+    check_count(flag, v as u64, max as u64)
+}
+
+/// A real option within `[lo, hi]` (and finite).
+pub fn check_range(flag: &str, v: f64, (lo, hi): (f64, f64)) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        v.is_finite() && (lo..=hi).contains(&v),
+        "{flag} must lie between {lo:e} and {hi:e}, got {v}"
+    );
+    Ok(())
+}
+
+/// An angle in degrees within ±`limits::MAX_ANGLE_DEG`.
+pub fn check_angle(flag: &str, v: f64) -> anyhow::Result<()> {
+    check_range(flag, v, (-limits::MAX_ANGLE_DEG, limits::MAX_ANGLE_DEG))
+}
+
+/// An exposure in stops within ±`limits::MAX_EXPOSURE`.
+pub fn check_exposure(v: f64) -> anyhow::Result<()> {
+    check_range("--exposure", v, (-limits::MAX_EXPOSURE, limits::MAX_EXPOSURE))
+}
+
+/// Peak bytes per pixel of a command, with a margin of about 2.5× over what was
+/// measured (`/usr/bin/time -f %M`, peak resident set at 1024² and 2048²): values,
+/// validity, standard errors and per-row results, the figure, the encoded PNG/EXR.
+/// `field`: 77 bytes per pixel measured.
+pub const FIELD_BYTES_PER_PIXEL: usize = 200;
+/// `caches`: the reference and the reconstruction, record lists, error map,
+/// figures: 141 measured (2D records are at most one per pixel).
+pub const CACHES_BYTES_PER_PIXEL: usize = 400;
+/// `render3d`: image and medium part, per-pixel statistics: 146 measured (records,
+/// which grow with ε → 0 rather than with pixels, are watched while running).
+pub const RENDER3D_BYTES_PER_PIXEL: usize = 400;
+
+/// Refuse an image whose memory (at `bytes_per_pixel`) exceeds what the machine
+/// has available, before any work is done (rather than aborting half-way).
+pub fn ensure_memory(pixels: usize, bytes_per_pixel: usize, what: &str) -> anyhow::Result<()> {
+    let need = (pixels as u64).saturating_mul(bytes_per_pixel as u64);
+    if let Some(avail) = available_memory() {
+        anyhow::ensure!(
+            need <= avail,
+            "{what} of {pixels} pixels needs about {:.1} GB of memory; {:.1} GB are available",
+            need as f64 / 1e9,
+            avail as f64 / 1e9
+        );
+    }
+    Ok(())
+}
+
+/// `MemAvailable` of /proc/meminfo, in bytes (None where there is none).
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// A progress handle cancelled by Ctrl-C, and a bar that follows it until dropped.
@@ -81,10 +155,19 @@ impl ProgressUi {
         bar.set_message(label.to_string());
         let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
         let (p, b, s) = (progress.clone(), bar.clone(), stop.clone());
+        let limit = memory_limit();
         let thread = std::thread::spawn(move || {
             while !s.load(std::sync::atomic::Ordering::Relaxed) {
                 b.set_length(p.total().max(1));
                 b.set_position(p.done());
+                // What grows with the input beyond the image (records as ε → 0,
+                // query points) stops the run cleanly instead of an abort.
+                if let (Some(rss), Some(limit)) = (resident_memory(), limit)
+                    && rss > limit
+                {
+                    MEMORY_STOP.store(true, std::sync::atomic::Ordering::Relaxed);
+                    p.cancel();
+                }
                 std::thread::sleep(Duration::from_millis(100));
             }
         });
@@ -124,6 +207,46 @@ impl Drop for ProgressUi {
     }
 }
 
+/// Set when a computation was stopped because the process outgrew its memory.
+static MEMORY_STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether the last cancel came from the memory watch rather than Ctrl-C.
+pub fn stopped_for_memory() -> bool {
+    MEMORY_STOP.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// How a cancelled computation ends: exit 130 after Ctrl-C, an error when the
+/// memory watch stopped it.
+pub fn cancelled() -> anyhow::Result<ExitCode> {
+    anyhow::ensure!(
+        !stopped_for_memory(),
+        "stopped: the run outgrew the memory available (fewer pixels, samples or march points, or a larger --eps)"
+    );
+    eprintln!("cancelled: no output written (existing files left untouched)");
+    Ok(ExitCode::from(INTERRUPTED))
+}
+
+/// The resident set size this process may reach: `VOLCACHE_MEMORY_LIMIT_MB`, or
+/// what it holds now plus 80% of what the machine has available.
+fn memory_limit() -> Option<u64> {
+    if let Some(mb) = std::env::var("VOLCACHE_MEMORY_LIMIT_MB")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        return Some(mb << 20);
+    }
+    Some(resident_memory()? + available_memory()? / 5 * 4)
+}
+
+/// This process's resident set size in bytes (`/proc/self/statm`).
+fn resident_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = text.split_whitespace().nth(1)?.parse().ok()?;
+    // SAFETY: sysconf has no preconditions.
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
+    Some(pages * page.max(4096) as u64)
+}
+
 /// The computation Ctrl-C cancels (the handler can be installed once per process).
 static CTRL_C_TARGET: Mutex<Option<Arc<Progress>>> = Mutex::new(None);
 
@@ -152,4 +275,101 @@ pub fn wrote(path: &Path, r: anyhow::Result<()>) -> anyhow::Result<()> {
     r.with_context(|| format!("writing {}", path.display()))?;
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// Exit code of a run stopped by Ctrl-C (128 + SIGINT), as shells report it.
+pub const INTERRUPTED: u8 = 130;
+
+/// Refuse, before any work is done, outputs that would overwrite an input of the
+/// run or each other.
+pub fn check_plan(plan: &OutputPlan) -> anyhow::Result<()> {
+    plan.check().map_err(anyhow::Error::from)
+}
+
+/// Write the outputs of a run as a set (`output::write_set`: every file renamed
+/// into place after all are written, the JSON summary last, naming the files and
+/// their hashes), print them, and give the exit code: 130 when Ctrl-C came (before
+/// the renames nothing is replaced; after, the outputs are complete and kept).
+pub fn write_outputs(
+    files: Vec<(PathBuf, Vec<u8>)>,
+    summary: Option<(&Path, serde_json::Value)>,
+    progress: &Progress,
+) -> anyhow::Result<ExitCode> {
+    let summary_path = summary.as_ref().map(|(p, _)| p.to_path_buf());
+    match write_set(&files, summary, &|| progress.is_cancelled()) {
+        Ok(_) => {}
+        Err(SetError::Interrupted) => {
+            eprintln!("cancelled: no output written (existing files left untouched)");
+            return Ok(ExitCode::from(INTERRUPTED));
+        }
+        Err(e) => return Err(anyhow::Error::from(e).context("writing the outputs")),
+    }
+    for p in files.iter().map(|(p, _)| p).chain(summary_path.as_ref()) {
+        eprintln!("wrote {}", p.display());
+    }
+    if progress.is_cancelled() {
+        eprintln!("interrupted while the outputs were being renamed into place: they are complete");
+        return Ok(ExitCode::from(INTERRUPTED));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// PNG bytes of a pixmap.
+pub fn png_bytes(path: &Path, pixmap: &tiny_skia::Pixmap) -> anyhow::Result<Vec<u8>> {
+    pixmap
+        .encode_png()
+        .map_err(|e| anyhow::anyhow!("{}: cannot encode the PNG: {e}", path.display()))
+}
+
+/// EXR bytes of a field.
+pub fn exr_bytes(path: &Path, field: &volcache::flatland::field::Field) -> anyhow::Result<Vec<u8>> {
+    volcache::output::encode_exr(field).with_context(|| format!("{}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ctrl-C during the write phase (issue 14: it was ignored and the run exited
+    /// 0): before the renames nothing is replaced and the exit code is 130.
+    #[test]
+    fn ctrl_c_while_writing_exits_130_and_replaces_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("f.png");
+        std::fs::write(&png, b"old").unwrap();
+        let progress = Progress::new();
+        progress.cancel();
+        let json = dir.path().join("f.json");
+        let code = write_outputs(
+            vec![(png.clone(), b"new".to_vec())],
+            Some((&json, serde_json::json!({}))),
+            &progress,
+        )
+        .unwrap();
+        assert_eq!(code, ExitCode::from(INTERRUPTED));
+        assert_eq!(std::fs::read(&png).unwrap(), b"old");
+        assert!(!json.exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // Not cancelled: written, summary last, exit 0.
+        let code = write_outputs(
+            vec![(png.clone(), b"new".to_vec())],
+            Some((&json, serde_json::json!({}))),
+            &Progress::new(),
+        )
+        .unwrap();
+        assert_eq!(code, ExitCode::SUCCESS);
+        assert_eq!(std::fs::read(&png).unwrap(), b"new");
+    }
+
+    #[test]
+    fn option_ranges() {
+        assert!(parse_res("4096x4096").is_ok());
+        assert!(parse_res("16384x16384").unwrap_err().contains("pixels"));
+        assert!(parse_point("1e12,-1e12").is_ok());
+        assert!(parse_point("1e308,0").is_err() && parse_point("nan,0").is_err());
+        assert!(check_range("--x", f64::NAN, (0.0, 1.0)).is_err());
+        assert!(check_exposure(100.0).is_ok() && check_exposure(100.5).is_err());
+        assert!(ensure_memory(1, 1, "x").is_ok());
+        assert!(ensure_memory(usize::MAX / 1024, 1024, "x").is_err());
+    }
 }

@@ -1,6 +1,9 @@
 //! `volcache field`: render a scene's radiance field to PNG (+ EXR, JSON).
 
-use super::common::{ProgressUi, load_scene, out_path, parse_res, scene_stem, wrote};
+use super::common::{
+    FIELD_BYTES_PER_PIXEL, ProgressUi, cancelled, check_angle, check_exposure, check_plan, check_spp, ensure_memory,
+    exr_bytes, load_scene, out_path, parse_res, png_bytes, scene_stem, write_outputs,
+};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -9,7 +12,8 @@ use volcache::core::color::luminance;
 use volcache::figure::{FieldStyle, field_figure};
 use volcache::flatland::field::{FieldParams, RenderedField, render_field};
 use volcache::flatland::scene_desc::{Part, Quantity};
-use volcache::output::{write_exr, write_json, write_png};
+use volcache::limits;
+use volcache::output::OutputPlan;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum QuantityArg {
@@ -99,6 +103,9 @@ pub struct FieldSummary<'a> {
     pub rays_per_second: f64,
     /// Mean over valid pixels of standard error / value (luminance).
     pub mean_relative_std_error: f64,
+    /// Pixels where the quantity is defined (L_s: inside the medium); the luminance
+    /// statistics are over them, and 0 when there are none.
+    pub valid_pixels: usize,
     pub luminance_min: f64,
     pub luminance_max: f64,
     pub luminance_mean: f64,
@@ -114,7 +121,7 @@ pub fn run(a: FieldArgs) -> anyhow::Result<ExitCode> {
         (params.width, params.height) = (w as usize, h as usize);
     }
     if let Some(s) = a.spp {
-        anyhow::ensure!(s > 0, "--spp must be at least 1");
+        check_spp("--spp", s, limits::MAX_SPP)?;
         params.spp = s;
     }
     params.seed = a.seed.unwrap_or(params.seed);
@@ -122,21 +129,33 @@ pub fn run(a: FieldArgs) -> anyhow::Result<ExitCode> {
     params.part = a.part.map_or(params.part, Into::into);
     params.omega_o_deg = a.omega_o.unwrap_or(params.omega_o_deg);
     let exposure = a.exposure.unwrap_or(scene.desc.render.exposure);
-    anyhow::ensure!(
-        params.omega_o_deg.is_finite() && exposure.is_finite(),
-        "--omega-o and --exposure must be finite"
-    );
+    check_angle("--omega-o", params.omega_o_deg)?;
+    check_exposure(exposure)?;
+    ensure_memory(params.width * params.height, FIELD_BYTES_PER_PIXEL, "the field")?;
+
+    let png = out_path(a.out, &stem, ".png");
+    let mut plan = OutputPlan::new();
+    if let Some(s) = &a.scene {
+        plan.input("the scene", s);
+    }
+    plan.output("--out", &png);
+    if let Some(e) = &a.exr {
+        plan.output("--exr", e);
+    }
+    if let Some(j) = &a.json {
+        plan.output("--json", j);
+    }
+    check_plan(&plan)?;
 
     let label = format!("{stem} {}x{} @ {} spp", params.width, params.height, params.spp);
     let ui = ProgressUi::new(&label, !a.quiet);
-    let result = render_field(&scene, &params, &ui.progress);
+    let progress = ui.progress.clone();
+    let result = render_field(&scene, &params, &progress);
     ui.finish();
     let Ok(rendered) = result else {
-        eprintln!("cancelled: no output written (existing files left untouched)");
-        return Ok(ExitCode::from(130));
+        return cancelled();
     };
 
-    let png = out_path(a.out, &stem, ".png");
     let style = if a.false_color {
         FieldStyle::FalseColor { log: true, range: None }
     } else {
@@ -149,9 +168,9 @@ pub fn run(a: FieldArgs) -> anyhow::Result<ExitCode> {
         params.spp
     );
     let pix = field_figure(&rendered.field, Some(&scene), &style, Some(&title));
-    wrote(&png, write_png(&png, &pix))?;
+    let mut files = vec![(png.clone(), png_bytes(&png, &pix)?)];
     if let Some(exr) = &a.exr {
-        wrote(exr, write_exr(exr, &rendered.field))?;
+        files.push((exr.clone(), exr_bytes(exr, &rendered.field)?));
     }
     let summary = summarize(
         &scene.source,
@@ -169,10 +188,11 @@ pub fn run(a: FieldArgs) -> anyhow::Result<ExitCode> {
         summary.samples_per_second,
         100.0 * summary.mean_relative_std_error
     );
-    if let Some(j) = &a.json {
-        wrote(j, write_json(j, &summary))?;
-    }
-    Ok(ExitCode::SUCCESS)
+    let json = match &a.json {
+        Some(j) => Some((j.as_path(), serde_json::to_value(&summary)?)),
+        None => None,
+    };
+    write_outputs(files, json, &progress)
 }
 
 fn quantity_label(q: Quantity) -> &'static str {
@@ -212,9 +232,11 @@ pub fn summarize<'a>(
         samples_per_second: samples as f64 / secs,
         rays_per_second: r.rays as f64 / secs,
         mean_relative_std_error: r.mean_relative_error(),
-        luminance_min: lum.iter().cloned().fold(f64::INFINITY, f64::min),
-        luminance_max: lum.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
-        luminance_mean: lum.iter().sum::<f64>() / lum.len().max(1) as f64,
+        valid_pixels: lum.len(),
+        luminance_min: lum.iter().cloned().reduce(f64::min).unwrap_or(0.0),
+        luminance_max: lum.iter().cloned().reduce(f64::max).unwrap_or(0.0),
+        // (0.0 + …: an empty sum is −0.0.)
+        luminance_mean: 0.0 + lum.iter().sum::<f64>() / lum.len().max(1) as f64,
         png: png.map(|p| p.display().to_string()),
         exr: exr.map(|p| p.display().to_string()),
     }

@@ -2,7 +2,7 @@
 //! reference, ours and Jarosz 2008 side by side with their cache distributions,
 //! error maps (shared range) and the numbers in the captions.
 
-use super::caches::{CacheArgs, field_params, reference, run_method};
+use super::caches::{CacheArgs, check_cache_args, field_params, reference, run_method};
 use super::common::{ProgressUi, load_scene, scene_stem, wrote};
 use clap::Args;
 use serde::Serialize;
@@ -58,6 +58,7 @@ pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
         cache.caches = Some(200);
     }
     let fp = field_params(&scene, &cache);
+    check_cache_args(&cache, &fp)?;
     let (reference, ref_info) = reference(&scene, &fp, &cache)?;
     let mut runs = Vec::new();
     for method in [FieldMethod::Ours, FieldMethod::Jarosz08] {

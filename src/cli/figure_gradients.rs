@@ -184,7 +184,7 @@ pub fn run(a: GradientArgs) -> anyhow::Result<ExitCode> {
     anyhow::ensure!(a.ref_spp >= 2, "--ref-spp must be at least 2 (two halves)");
     let line_ref_spp = a.line_ref_spp.unwrap_or(a.ref_spp.saturating_mul(4));
     anyhow::ensure!(line_ref_spp >= 2, "--line-ref-spp must be at least 2 (two halves)");
-    anyhow::ensure!(a.fd_step > 0.0 && a.fd_step.is_finite(), "--fd-step must be positive");
+    super::common::check_range("--fd-step", a.fd_step, volcache::limits::FD_STEP)?;
     let r = &scene.desc.render;
     let seed = a.seed.unwrap_or(r.seed);
     let omega_o_deg = r.omega_o_deg;

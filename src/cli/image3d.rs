@@ -3,14 +3,16 @@
 //! `merge3d` and the comparison figures read; errors against a reference EXR; the
 //! `--crop` / `--tile` windows.
 
-use super::common::wrote;
+use super::common::{self, exr_bytes, png_bytes};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use volcache::core::color::{Rgb, luminance};
 use volcache::core::stats::{ImageErrors, luminance_errors};
 use volcache::figure::tonemap;
-use volcache::output::{image_field, read_exr, write_exr, write_json, write_png};
+use volcache::output::{image_field, read_exr};
+use volcache::progress::Progress;
 use volcache::volume::cached::CacheSettings;
 use volcache::volume::render::{RenderParams, Rendered};
 
@@ -196,25 +198,49 @@ pub fn reference_errors(img: &Rendered, reference: &Path) -> anyhow::Result<Refe
     })
 }
 
-/// Write `<base>.exr`, `<base>_medium.exr`, `<base>.png` and `<base>.json`
-/// (the summary's file names are filled in here).
-pub fn write_outputs(base: &Path, img: &Rendered, exposure: f64, summary: &mut Summary3d) -> anyhow::Result<()> {
+/// The files a 3D render writes: `<base>.exr`, `<base>_medium.exr`, `<base>.png`,
+/// and the summary `<base>.json` (last).
+pub fn output_paths(base: &Path) -> [PathBuf; 4] {
     let exr = base.with_extension("exr");
-    let med = medium_path(&exr);
-    let png = base.with_extension("png");
-    let json = base.with_extension("json");
+    [
+        medium_path(&exr),
+        base.with_extension("png"),
+        base.with_extension("json"),
+        exr,
+    ]
+}
+
+/// Write `<base>.exr`, `<base>_medium.exr`, `<base>.png` and `<base>.json` as a set
+/// (the summary last, naming the others with their hashes; its file names are
+/// filled in here). Returns the exit code (130 when Ctrl-C came).
+pub fn write_outputs(
+    base: &Path,
+    img: &Rendered,
+    exposure: f64,
+    summary: &mut Summary3d,
+    progress: &Progress,
+) -> anyhow::Result<ExitCode> {
+    let [med, png, json, exr] = output_paths(base);
     let name = |p: &Path| {
         p.file_name()
             .map_or(String::new(), |n| n.to_string_lossy().into_owned())
     };
     (summary.exr, summary.medium_exr, summary.png) = (name(&exr), name(&med), name(&png));
-    wrote(&exr, write_exr(&exr, &image_field(img.width, img.height, &img.values)))?;
-    wrote(&med, write_exr(&med, &image_field(img.width, img.height, &img.medium)))?;
-    wrote(
-        &png,
-        write_png(&png, &tonemapped(img.width, img.height, &img.values, exposure)?),
-    )?;
-    wrote(&json, write_json(&json, summary))
+    let files = vec![
+        (
+            exr.clone(),
+            exr_bytes(&exr, &image_field(img.width, img.height, &img.values))?,
+        ),
+        (
+            med.clone(),
+            exr_bytes(&med, &image_field(img.width, img.height, &img.medium))?,
+        ),
+        (
+            png.clone(),
+            png_bytes(&png, &tonemapped(img.width, img.height, &img.values, exposure)?)?,
+        ),
+    ];
+    common::write_outputs(files, Some((&json, serde_json::to_value(&*summary)?)), progress)
 }
 
 /// Mean luminance of an image.

@@ -8,11 +8,15 @@
 //! from a full render near tile borders: reported, not refused). Costs add up: the
 //! summary's seconds and rays are the sum over tiles, plus a shared placement once.
 
-use super::image3d::{Summary3d, mean_luminance, read_image, reference_errors, write_outputs};
+use super::common::{RENDER3D_BYTES_PER_PIXEL, check_exposure, check_plan, ensure_memory};
+use super::image3d::{Summary3d, mean_luminance, output_paths, read_image, reference_errors, write_outputs};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use volcache::core::color::Rgb;
+use volcache::limits;
+use volcache::output::OutputPlan;
+use volcache::progress::Progress;
 use volcache::volume::render::Rendered;
 
 #[derive(Args, Debug)]
@@ -54,6 +58,29 @@ pub fn run(a: Merge3dArgs) -> anyhow::Result<ExitCode> {
     let mut full_params = first.params.clone();
     full_params.crop = None;
     let (w, h) = (full_params.width, full_params.height);
+    // The summaries are inputs like any other: their image must fit in memory.
+    if let Some(why) = limits::resolution_problem(w.min(u32::MAX as usize) as u32, h.min(u32::MAX as usize) as u32) {
+        anyhow::bail!("{}: params: the image {why}", first_path.display());
+    }
+    ensure_memory(w * h, RENDER3D_BYTES_PER_PIXEL, "the merged image")?;
+    let stem = Path::new(&first.scene)
+        .file_stem()
+        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    let base = a.out.join(format!("{stem}_{}", first.method));
+    let mut plan = OutputPlan::new();
+    for (p, t) in &tiles {
+        let dir = p.parent().unwrap_or(Path::new("."));
+        plan.input("a tile", p)
+            .input("a tile", &dir.join(&t.exr))
+            .input("a tile", &dir.join(&t.medium_exr));
+    }
+    if let Some(r) = &a.reference {
+        plan.input("--reference", r);
+    }
+    for p in output_paths(&base) {
+        plan.output(format!("--out {}", a.out.display()), &p);
+    }
+    check_plan(&plan)?;
     let mut cover = vec![0u8; w * h];
     let mut values = vec![Rgb::ZERO; w * h];
     let mut medium = vec![Rgb::ZERO; w * h];
@@ -165,19 +192,14 @@ pub fn run(a: Merge3dArgs) -> anyhow::Result<ExitCode> {
     if let Some(r) = &a.reference {
         summary.errors = Some(reference_errors(&img, r)?);
     }
-    let stem = Path::new(&first.scene)
-        .file_stem()
-        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     eprintln!(
         "merged {} tiles into {w}x{h}: {:.2} s, {} rays in all",
         tiles.len(),
         seconds,
         rays
     );
-    let base = a.out.join(format!("{stem}_{}", first.method));
     summary.exposure = a.exposure.unwrap_or(first.exposure);
-    anyhow::ensure!(summary.exposure.is_finite(), "--exposure must be finite");
+    check_exposure(summary.exposure)?;
     let exposure = summary.exposure;
-    write_outputs(&base, &img, exposure, &mut summary)?;
-    Ok(ExitCode::SUCCESS)
+    write_outputs(&base, &img, exposure, &mut summary, &Progress::new())
 }

@@ -25,6 +25,7 @@ mod render3d_cache;
 mod setup3d;
 
 use clap::{Parser, Subcommand};
+pub use common::cancelled;
 use std::process::ExitCode;
 
 #[derive(Parser, Debug)]

@@ -1,6 +1,6 @@
 //! `volcache probe`: L_s (or fluence) and its parts at points.
 
-use super::common::load_scene;
+use super::common::{check_angle, check_spp, load_scene};
 use super::probe_args::{Method, ProbeArgs};
 use glam::DVec2;
 use rayon::prelude::*;
@@ -8,6 +8,7 @@ use serde::Serialize;
 use std::process::ExitCode;
 use volcache::core::color::{Rgb, luminance};
 use volcache::flatland::scene_desc::Quantity;
+use volcache::limits;
 use volcache::pipeline::path::{Parts, Query, Settings, estimate};
 use volcache::pipeline::world::World;
 
@@ -54,11 +55,11 @@ pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let r = &scene.desc.render;
     let spp = a.spp.unwrap_or(r.spp.saturating_mul(64));
-    anyhow::ensure!(spp > 0, "--spp must be at least 1");
+    check_spp("--spp", spp, limits::MAX_PROBE_SPP)?;
     let seed = a.seed.unwrap_or(r.seed);
     let quantity = a.quantity.map_or(r.quantity, Into::into);
     let omega_deg = a.omega_o.unwrap_or(r.omega_o_deg);
-    anyhow::ensure!(omega_deg.is_finite(), "--omega-o must be finite");
+    check_angle("--omega-o", omega_deg)?;
     let q = Query::from_quantity(quantity, DVec2::from_angle(omega_deg.to_radians()));
     let settings = Settings {
         max_depth: r.max_depth,

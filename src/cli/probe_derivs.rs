@@ -1,7 +1,7 @@
 //! `volcache probe --method aware|unaware|reference`: L_s with gradient and Hessian
 //! (and the Hessian's eigen-decomposition) per part.
 
-use super::common::load_scene;
+use super::common::{check_angle, check_count, check_range, check_spp, load_scene};
 use super::probe_args::{Method, ProbeArgs};
 use glam::DVec2;
 use serde::Serialize;
@@ -9,6 +9,7 @@ use std::process::ExitCode;
 use volcache::core::space::{D2, Space};
 use volcache::core::taylor::Taylor2;
 use volcache::core::taylor_rgb::TaylorRgb;
+use volcache::limits;
 use volcache::pipeline::derivatives::{self, AwareSettings, ReferenceSettings};
 use volcache::pipeline::path::Settings;
 use volcache::pipeline::probe::{Outgoing, ProbeSettings};
@@ -74,10 +75,18 @@ pub struct DerivOut {
 pub fn run(a: &ProbeArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let r = &scene.desc.render;
+    check_count("--rays", a.rays as u64, 1 << 20)?;
     anyhow::ensure!(a.rays >= 3, "--rays must be at least 3");
-    anyhow::ensure!(a.fd_step > 0.0 && a.fd_step.is_finite(), "--fd-step must be positive");
+    check_count("--steps", a.steps as u64, 4096)?;
+    check_count("--paths", a.paths as u64, 1024)?;
+    check_range("--fd-step", a.fd_step, limits::FD_STEP)?;
+    check_range("--medium-clamp", a.medium_clamp, limits::MEDIUM_CLAMP)?;
+    if let Some(spp) = a.spp {
+        check_spp("--spp", spp, limits::MAX_PROBE_SPP)?;
+    }
     let seed = a.seed.unwrap_or(r.seed);
     let omega_deg = a.omega_o.unwrap_or(r.omega_o_deg);
+    check_angle("--omega-o", omega_deg)?;
     let omega_o = DVec2::from_angle(omega_deg.to_radians());
     let settings = Settings {
         max_depth: r.max_depth,

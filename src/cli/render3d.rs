@@ -6,16 +6,21 @@
 //! full render; cache methods share their records through `--records-out` /
 //! `--records-in`.
 
-use super::common::{ProgressUi, parse_res};
+use super::common::{
+    ProgressUi, RENDER3D_BYTES_PER_PIXEL, cancelled, check_exposure, check_plan, check_spp, ensure_memory, parse_res,
+};
 use super::image3d::{
-    CacheSummary, Summary3d, mean_luminance, parse_crop, parse_tile, reference_errors, set_window, write_outputs,
+    CacheSummary, Summary3d, mean_luminance, medium_path, output_paths, parse_crop, parse_tile, reference_errors,
+    set_window, write_outputs,
 };
 use super::render3d_cache::{Cache3dArgs, RecordsArgs, run_cached};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use volcache::core::metric::CacheMethod;
+use volcache::limits;
+use volcache::output::OutputPlan;
 use volcache::volume::records_file::scene_hash;
 use volcache::volume::render::{RenderParams, Rendered, ray_cast_rate, render};
 use volcache::volume::scene::Scene;
@@ -154,6 +159,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         params.time_budget = Some(b);
         params.spp = a.spp.unwrap_or(1 << 24);
     } else if let Some(s) = a.spp {
+        check_spp("--spp", s, limits::MAX_SPP)?;
         params.spp = s;
     } else if a.method != Method::Pt {
         params.spp = 4;
@@ -162,24 +168,29 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
     params.seed = a.seed.unwrap_or(params.seed);
     let tile_suffix = set_window(&mut params, a.crop, a.tile)?;
     let exposure = a.exposure.unwrap_or(scene.desc.render.exposure);
-    anyhow::ensure!(exposure.is_finite(), "--exposure must be finite");
+    check_exposure(exposure)?;
+    ensure_memory(params.width * params.height, RENDER3D_BYTES_PER_PIXEL, "the image")?;
+    let base = a.out.join(format!(
+        "{stem}_{}{}",
+        a.method.name(),
+        tile_suffix.clone().unwrap_or_default()
+    ));
+    check_plan(&plan(&a, &scene, &base))?;
 
     let [x0, y0, x1, y1] = params.window();
     let label = format!("{stem} {}x{} {}", x1 - x0, y1 - y0, a.method.name());
     let ui = ProgressUi::new(&label, !a.quiet);
+    let progress = ui.progress.clone();
     let result: Result<(Option<Rendered>, Option<CacheSummary>), anyhow::Error> = match a.method.cache_method() {
-        None => render(&scene, &params, &ui.progress)
+        None => render(&scene, &params, &progress)
             .map(|img| (Some(img), None))
             .map_err(anyhow::Error::from),
-        Some(m) => run_cached(&scene, &params, m, &a.cache, &a.records, &ui.progress).map(|(img, c)| (img, Some(c))),
+        Some(m) => run_cached(&scene, &params, m, &a.cache, &a.records, &progress).map(|(img, c)| (img, Some(c))),
     };
     ui.finish();
     let (img, cache) = match result {
         Ok(r) => r,
-        Err(e) if e.is::<volcache::progress::Cancelled>() => {
-            eprintln!("cancelled: no output written (existing files left untouched)");
-            return Ok(ExitCode::from(130));
-        }
+        Err(e) if e.is::<volcache::progress::Cancelled>() => return cancelled(),
         Err(e) => return Err(e),
     };
     let Some(img) = img else {
@@ -199,11 +210,34 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         summary.errors = Some(reference_errors(&img, r)?);
     }
     report(&summary, &img);
-    let base = a
-        .out
-        .join(format!("{stem}_{}{}", a.method.name(), tile_suffix.unwrap_or_default()));
-    write_outputs(&base, &img, exposure, &mut summary)?;
-    Ok(ExitCode::SUCCESS)
+    write_outputs(&base, &img, exposure, &mut summary, &progress)
+}
+
+/// What a render reads (the scene, its meshes, records and reference) and writes.
+fn plan(a: &Render3dArgs, scene: &Scene, base: &Path) -> OutputPlan {
+    let mut plan = OutputPlan::new();
+    plan.input("the scene", &a.scene);
+    let dir = a.scene.parent().unwrap_or(Path::new("."));
+    for (i, s) in scene.desc.shapes.iter().enumerate() {
+        if let Some(m) = &s.mesh {
+            plan.input(format!("the mesh of shapes[{i}]"), &dir.join(&m.path));
+        }
+    }
+    if let Some(r) = &a.records.records_in {
+        plan.input("--records-in", r);
+    }
+    if let Some(r) = &a.reference {
+        plan.input("--reference", r).input("--reference", &medium_path(r));
+    }
+    if let Some(r) = &a.records.records_out {
+        plan.output("--records-out", r);
+    }
+    if !a.records.place_only {
+        for p in output_paths(base) {
+            plan.output(format!("--out {}", a.out.display()), &p);
+        }
+    }
+    plan
 }
 
 fn report(s: &Summary3d, img: &Rendered) {

@@ -91,7 +91,11 @@ impl Cache3dArgs {
             cp.march_step = d;
         }
         let eps = self.eps.unwrap_or_else(|| default_eps(method, scene));
-        anyhow::ensure!(eps.is_finite() && eps >= 0.0, "--eps must be finite and >= 0");
+        let (lo, hi) = volcache::limits::EPS;
+        anyhow::ensure!(
+            eps.is_finite() && (lo..=hi).contains(&eps),
+            "--eps must lie between {lo:e} and {hi:e}, got {eps}"
+        );
         if let Some(n) = self.caches {
             anyhow::ensure!(n > 0, "--caches must be at least 1");
         }

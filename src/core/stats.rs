@@ -54,22 +54,37 @@ pub struct ImageErrors {
 
 impl ImageErrors {
     /// From (test, reference) luminance pairs; all zero for none.
+    ///
+    /// Computed on values divided by the largest |value| (every measure is
+    /// homogeneous, so this changes nothing but keeps squares of 10³⁰⁰ or 10⁻³⁰⁰ in
+    /// range). Where the reference is zero everywhere its mean gives no floor for
+    /// relMSE: the test's mean does instead, and an all-zero pair of images has
+    /// relMSE 0 (not (a − b)²/f64::MIN_POSITIVE, ~10³⁰³).
     pub fn of_luminance_pairs(pairs: &[(f64, f64)]) -> Self {
         if pairs.is_empty() {
             return ImageErrors::default();
         }
         let n = pairs.len() as f64;
-        let mean_ref = pairs.iter().map(|p| p.1).sum::<f64>() / n;
-        let floor = 0.01 * mean_ref * mean_ref;
+        let scale = pairs.iter().fold(0.0f64, |m, (a, b)| m.max(a.abs()).max(b.abs()));
+        let s = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
+        let mean = |f: fn(&(f64, f64)) -> f64| pairs.iter().map(|p| f(p) / s).sum::<f64>() / n;
+        let mean_ref = mean(|p| p.1);
+        let floor_mean = if mean_ref != 0.0 { mean_ref } else { mean(|p| p.0.abs()) };
+        let floor = 0.01 * floor_mean * floor_mean;
+        let relmse = pairs
+            .iter()
+            .map(|(a, b)| {
+                let (a, b) = (a / s, b / s);
+                let den = b * b + floor;
+                if den > 0.0 { (a - b).powi(2) / den } else { 0.0 }
+            })
+            .sum::<f64>()
+            / n;
         ImageErrors {
-            rmse: (pairs.iter().map(|(a, b)| (a - b).powi(2)).sum::<f64>() / n).sqrt(),
-            relmse: pairs
-                .iter()
-                .map(|(a, b)| (a - b).powi(2) / (b * b + floor).max(f64::MIN_POSITIVE))
-                .sum::<f64>()
-                / n,
+            rmse: s * (pairs.iter().map(|(a, b)| ((a - b) / s).powi(2)).sum::<f64>() / n).sqrt(),
+            relmse,
             max_abs: pairs.iter().map(|(a, b)| (a - b).abs()).fold(0.0, f64::max),
-            mean_reference: mean_ref,
+            mean_reference: mean_ref * s,
             pixels: pairs.len(),
         }
     }
@@ -126,6 +141,28 @@ mod tests {
         assert!((s.mean() - mean).abs() < 1e-12);
         assert!((s.variance() - var).abs() < 1e-12);
         assert_eq!(rmse(&[1.0, 2.0], &[1.0, 4.0]), 2f64.sqrt());
+    }
+
+    /// relMSE against an all-zero reference is finite (it was up to 6.5·10³⁰³ or
+    /// inf), and the measures are unchanged by a common scale, even at 10±³⁰⁰.
+    #[test]
+    fn errors_stay_finite_at_extremes() {
+        let zero = ImageErrors::of_luminance_pairs(&[(0.0, 0.0), (0.0, 0.0)]);
+        assert_eq!((zero.rmse, zero.relmse), (0.0, 0.0));
+        let e = ImageErrors::of_luminance_pairs(&[(1.0, 0.0), (3.0, 0.0)]);
+        // Floor: 0.01 × mean(test)² = 0.04, so (1 + 9) / 0.04 / 2.
+        assert!((e.relmse - 125.0).abs() < 1e-12, "{e:?}");
+        let base = [(1.0, 2.0), (3.0, 2.5), (0.0, 0.5)];
+        let want = ImageErrors::of_luminance_pairs(&base);
+        for k in [1e-300, 1e300, 5e-324 / 0.5] {
+            let scaled: Vec<(f64, f64)> = base.iter().map(|(a, b)| (a * k, b * k)).collect();
+            let e = ImageErrors::of_luminance_pairs(&scaled);
+            assert!(e.rmse.is_finite() && e.relmse.is_finite(), "{k}: {e:?}");
+            if k > 1e-320 {
+                assert!((e.rmse / k / want.rmse - 1.0).abs() < 1e-12, "{k}: {e:?}");
+                assert!((e.relmse / want.relmse - 1.0).abs() < 1e-12, "{k}: {e:?}");
+            }
+        }
     }
 
     #[test]

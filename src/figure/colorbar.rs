@@ -55,8 +55,22 @@ impl ColorScale {
             if !(lo.is_finite() && lo > 0.0 && lo < hi) {
                 lo = hi * 1e-3;
             }
+            // Subnormal ends would give log10 → −inf (a tick count of 2³¹): keep the
+            // range within normal floats.
+            lo = lo.max(f64::MIN_POSITIVE);
+            if hi <= lo {
+                hi = 10.0 * lo;
+            }
         } else if !(lo.is_finite() && lo < hi) {
             lo = if hi > 0.0 { 0.0 } else { hi - 1.0 };
+        }
+        if !log && !(hi - lo).is_normal() {
+            // A width that overflows or is subnormal: a unit range around the top.
+            (lo, hi) = if hi.abs() > 1.0 {
+                (hi - hi.abs() * 0.5, hi)
+            } else {
+                (hi - 1.0, hi)
+            };
         }
         ColorScale { log, min: lo, max: hi }
     }
@@ -92,8 +106,11 @@ impl ColorScale {
         let t = if self.log {
             if v <= 0.0 {
                 0.0
-            } else {
+            } else if (self.max / self.min).is_finite() && (v / self.min).is_finite() {
                 (v / self.min).ln() / (self.max / self.min).ln()
+            } else {
+                // Ranges wider than f64 (10⁻³⁰⁰…10³⁰⁰): the same in logarithms.
+                (v.ln() - self.min.ln()) / (self.max.ln() - self.min.ln())
             }
         } else {
             (v - self.min) / (self.max - self.min)
@@ -104,7 +121,12 @@ impl ColorScale {
     /// Value at position t ∈ [0, 1] of the range.
     pub fn value_at(&self, t: f64) -> f64 {
         if self.log {
-            self.min * (self.max / self.min).powf(t)
+            let ratio = self.max / self.min;
+            if ratio.is_finite() {
+                self.min * ratio.powf(t)
+            } else {
+                (self.min.ln() + t * (self.max.ln() - self.min.ln())).exp()
+            }
         } else {
             self.min + t * (self.max - self.min)
         }
@@ -137,6 +159,13 @@ impl ColorScale {
         let step = nice_step((self.max - self.min) / (max_labels - 1) as f64);
         let first = (self.min / step - 1e-9).ceil() as i64;
         let last = (self.max / step + 1e-9).floor() as i64;
+        // A step lost in rounding (a range near the limits of f64) would ask for
+        // billions of ticks: label the ends instead.
+        if !(step > 0.0 && step.is_finite()) || last.saturating_sub(first) > 4 * max_labels as i64 {
+            return [self.min, self.max]
+                .map(|v| self.tick(v, Some(format!("{v:.3e}"))))
+                .into();
+        }
         let magnitude = self.min.abs().max(self.max.abs());
         // Plain decimals for moderate magnitudes, a common power of ten otherwise.
         let exponent = if (1e-2..1e5).contains(&magnitude) {
@@ -386,6 +415,36 @@ pub fn draw_colorbar(pixmap: &mut Pixmap, scale: &ColorScale, x: f32, y: f32, he
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ranges at the ends of f64 (a field of 5·10⁻³²⁴ from σ_s = 5e-324, adjacent
+    /// subnormals, a width that overflows) give a handful of finite ticks: they
+    /// asked for 2³¹ (5.4 GB) before.
+    #[test]
+    fn extreme_ranges_give_few_ticks() {
+        let cases = [
+            ColorScale::auto([5e-324, 1e-323, 0.0], true),
+            ColorScale::auto([5e-324, 1e-323], false),
+            ColorScale::new(true, 0.0, 5e-324),
+            ColorScale::new(false, 5e-324, 1e-323),
+            ColorScale::new(false, -1e308, 1e308),
+            ColorScale::new(true, 1e-300, 1e300),
+            ColorScale::new(false, 1e300, 1.0000000000000002e300),
+        ];
+        for scale in cases {
+            for n in [2, 8, 40] {
+                let ticks = scale.ticks(n);
+                assert!(ticks.len() <= 700, "{scale:?}: {} ticks", ticks.len());
+                assert!(
+                    ticks.iter().all(|t| t.value.is_finite() && t.t.is_finite()),
+                    "{scale:?}"
+                );
+            }
+            assert!(
+                scale.min.is_finite() && scale.max.is_finite() && scale.min < scale.max,
+                "{scale:?}"
+            );
+        }
+    }
 
     fn labels(ticks: &[Tick]) -> Vec<String> {
         ticks.iter().filter_map(|t| t.label.clone()).collect()

@@ -170,6 +170,10 @@ fn pixel_semi_axes(view: &View, r: &RecordInfo) -> Option<(DVec2, DVec2, DVec2)>
     Some((c, a0 * r0.min(cap) * to_px, a1 * r1.min(cap) * to_px))
 }
 
+/// Most arcs one ellipse is split into (a few thousand suffice for any ellipse
+/// that fits in 10⁴ views; far beyond, its visible part is a straight edge anyway).
+const MAX_ELLIPSE_SPLITS: usize = 1 << 16;
+
 /// The ellipse c + u·cos t + v·sin t (pixels) as a closed polyline (first point not
 /// repeated) within 0.2 px of the curve where it may cross the rectangle [lo, hi]:
 /// arcs are split until their chord is that close or provably outside, so huge
@@ -184,6 +188,9 @@ fn ellipse_polyline(c: DVec2, u: DVec2, v: DVec2, lo: DVec2, hi: DVec2) -> Vec<D
     let bend = u.length() + v.length();
     let n0 = ((TAU * bend / 6.0).ceil() as usize).clamp(12, 256);
     let mut pts = Vec::with_capacity(n0);
+    // Arcs split in all: where rounding keeps the bound from ever proving an arc
+    // outside (extents ~10¹⁵ px), splitting would otherwise go on for 2⁶⁰ arcs.
+    let mut splits = 0usize;
     // Depth-first over [t0, t1] (iterative, so no recursion limit to worry about).
     for k in 0..n0 {
         let mut stack = vec![(TAU * k as f64 / n0 as f64, TAU * (k + 1) as f64 / n0 as f64, 0u32)];
@@ -191,10 +198,11 @@ fn ellipse_polyline(c: DVec2, u: DVec2, v: DVec2, lo: DVec2, hi: DVec2) -> Vec<D
             let (a, b) = (at(t0), at(t1));
             let sag = bend * (t1 - t0).powi(2) / 8.0;
             let outside = (a.max(b) + sag).cmplt(lo).any() || (a.min(b) - sag).cmpgt(hi).any();
-            if sag < 0.2 || depth >= 60 || outside {
+            if sag < 0.2 || depth >= 60 || outside || splits >= MAX_ELLIPSE_SPLITS {
                 pts.push(a);
             } else {
                 let m = 0.5 * (t0 + t1);
+                splits += 1;
                 stack.push((m, t1, depth + 1));
                 stack.push((t0, m, depth + 1));
             }
@@ -370,6 +378,30 @@ pub fn records_figure(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ellipses far larger than the view (a record of a 10⁻³⁰⁷-wide domain, or any
+    /// extent near the 10¹² views cap) are outlined in bounded time and points
+    /// (they split 2⁶⁰ arcs before).
+    #[test]
+    fn huge_ellipses_end() {
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let (lo, hi) = (DVec2::ZERO, DVec2::splat(100.0));
+            let mut most = 0;
+            for r in [1e6, 1e12, 1e15, 1e300] {
+                for c in [DVec2::splat(50.0), DVec2::new(50.0 - r, 50.0), DVec2::new(3.0e7, -2.0)] {
+                    let pts = ellipse_polyline(c, DVec2::new(r, 0.0), DVec2::new(0.0, r * 0.5), lo, hi);
+                    assert!(pts.iter().all(|p| p.is_finite()));
+                    most = most.max(pts.len());
+                }
+            }
+            tx.send(most).unwrap();
+        });
+        let most = rx
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("outlining huge ellipses did not end within 20 s");
+        assert!(most <= 2 * MAX_ELLIPSE_SPLITS + 256, "{most} points");
+    }
 
     fn record(x: f64, y: f64, axis: DVec2, radii: [f64; 2], luminance: f64, rays: u64) -> RecordInfo {
         let a = axis.normalize();

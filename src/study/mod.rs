@@ -2,6 +2,8 @@
 //! used by the command line and the app alike. They run the methods of `flatland`
 //! (2D fields) and `volume` (3D images); they draw nothing and parse no options.
 //!
+//! - [`exact2d`]: exact single scattering in flatland (visibility intervals +
+//!   Gauss–Legendre) and its derivatives, to judge estimators by.
 //! - [`seeds`]: the seeds of an experiment's parts (reference, path tracing,
 //!   gradient points) from the one seed the user gives.
 //! - [`stored`]: the on-disk reference store (key, full-precision images);
@@ -17,6 +19,7 @@
 //!   [`gradients`]: the gradient study over a grid and a line;
 //!   [`gradient_summary`]: its errors against the reference.
 
+pub mod exact2d;
 pub mod field_runs;
 pub mod gradient_summary;
 pub mod gradients;

@@ -2,7 +2,7 @@
 //! in the reference store ([`super::stored`]) so sweeps and comparisons do not
 //! recompute them.
 
-use super::stored::{read_image, read_info, store_key, write_image, write_info};
+use super::stored::{entry_path, read_image, read_info, store_key, write_image, write_info};
 use crate::flatland::field::{Field, FieldParams, render_field};
 use crate::flatland::scene::Scene;
 use crate::progress::Progress;
@@ -21,6 +21,14 @@ pub struct ReferenceInfo {
     pub rms_std_error: f64,
     pub seconds: f64,
     pub from_disk: bool,
+}
+
+/// The files the store in `dir` holds for the reference of `fp` (full-precision
+/// values, the EXR to look at, the JSON description): outputs of a run that may
+/// render it, so they are checked against its inputs and other outputs.
+pub fn reference_files(scene: &Scene, fp: &FieldParams, dir: &Path) -> Vec<std::path::PathBuf> {
+    let key = store_key(&scene.desc, fp);
+    ["rgb64", "exr", "json"].map(|ext| entry_path(dir, &key, ext)).to_vec()
 }
 
 /// The reference field for `fp` (its spp and seed are the reference's) from the

@@ -32,7 +32,15 @@ pub struct CameraRay {
     pub medium: Option<(f64, f64)>,
     /// March offset ξ in [0, 1).
     pub offset: f64,
+    /// Beyond this t the transmittance from the camera is exactly 0 in f64 (optical
+    /// depth past [`OPAQUE_DEPTH`] in every channel): march points there add 0 to
+    /// the image, so they are not visited (placement would spend records on them).
+    pub opaque_from: f64,
 }
+
+/// Optical depth at which e^{−τ} underflows to exactly 0.0 in f64 (e^{−745.2} is
+/// the smallest subnormal; 746 leaves a margin for rounding).
+pub const OPAQUE_DEPTH: f64 = 746.0;
 
 impl CameraRay {
     /// Sample `k` of full-image pixel `pixel` (row-major, `cam.width` wide). Returns
@@ -47,6 +55,12 @@ impl CameraRay {
         let hit = scene.closest_hit(origin, dir, f64::INFINITY, None);
         let end = hit.map_or_else(|| scene.world_exit(origin, dir), |h| h.t);
         let medium = scene.medium.as_ref().and_then(|m| m.region.pieces(origin, dir, end));
+        // The medium is homogeneous: optical depth σ_t (t − t0) from the piece's start;
+        // the least attenuated channel sets where every channel has reached 0.
+        let opaque_from = match (&scene.medium, medium) {
+            (Some(m), Some((t0, _))) if m.sigma_t.min_element() > 0.0 => t0 + OPAQUE_DEPTH / m.sigma_t.min_element(),
+            _ => f64::INFINITY,
+        };
         (
             CameraRay {
                 origin,
@@ -54,6 +68,7 @@ impl CameraRay {
                 hit,
                 medium,
                 offset,
+                opaque_from,
             },
             s,
         )
@@ -68,13 +83,15 @@ impl CameraRay {
         }
     }
 
-    /// The march points (n, t_n) for a step `step` (> 0).
+    /// The march points (n, t_n) for a step `step` (> 0), up to where the camera's
+    /// transmittance is 0 (`opaque_from`; the step does not depend on it).
     pub fn march(&self, step: f64) -> impl Iterator<Item = (usize, f64)> + '_ {
         let (t0, t1) = self.medium.unwrap_or((0.0, 0.0));
         let dt = self.step(step);
+        let end = t1.min(self.opaque_from);
         (0..)
             .map(move |n| (n, t0 + (n as f64 + self.offset) * dt))
-            .take_while(move |&(n, t)| t < t1 && n < MAX_MARCH_POINTS)
+            .take_while(move |&(n, t)| t < end && n < MAX_MARCH_POINTS)
     }
 
     pub fn at(&self, t: f64) -> DVec3 {
@@ -86,17 +103,17 @@ impl CameraRay {
 mod tests {
     use super::*;
 
+    fn fog_room_json() -> String {
+        r#"{ "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov_deg": 40},
+             "shapes": [{"quad": {"origin": [-5, -5, -1], "u": [10, 0, 0], "v": [0, 10, 0]}, "reflectance": 0.5}],
+             "lights": [{"sky": {"radiance": 1}}],
+             "medium": {"sigma_a": 0.1, "sigma_s": 0.2, "g": 0,
+                        "region": {"box": {"min": [-2, -2, -1], "max": [2, 2, 2]}}} }"#
+            .to_string()
+    }
+
     fn fog_room() -> Scene {
-        Scene::from_json(
-            r#"{ "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov_deg": 40},
-                 "shapes": [{"quad": {"origin": [-5, -5, -1], "u": [10, 0, 0], "v": [0, 10, 0]}, "reflectance": 0.5}],
-                 "lights": [{"sky": {"radiance": 1}}],
-                 "medium": {"sigma_a": 0.1, "sigma_s": 0.2, "g": 0,
-                            "region": {"box": {"min": [-2, -2, -1], "max": [2, 2, 2]}}} }"#,
-            "<test>",
-            std::path::Path::new("."),
-        )
-        .unwrap()
+        Scene::from_json(&fog_room_json(), "<test>", std::path::Path::new(".")).unwrap()
     }
 
     /// March points lie in the medium's piece before the hit, one per step, and
@@ -117,5 +134,40 @@ mod tests {
         assert!(pts.iter().all(|&(_, t)| t >= t0 && t < t1));
         // A step far too small is stretched to the cap.
         assert_eq!(r.march(1e-300).count(), MAX_MARCH_POINTS);
+    }
+
+    /// In a medium so dense that the camera's transmittance underflows to 0 within
+    /// the box, march points stop there: the points skipped have T = 0 exactly, and
+    /// those kept T > 0.
+    #[test]
+    fn march_stops_where_the_camera_sees_nothing() {
+        let s = Scene::from_json(
+            &fog_room_json().replace(
+                r#""sigma_a": 0.1, "sigma_s": 0.2"#,
+                r#""sigma_a": 0, "sigma_s": [1e3, 2e3, 5e3]"#,
+            ),
+            "<test>",
+            std::path::Path::new("."),
+        )
+        .unwrap();
+        let m = s.medium.as_ref().unwrap();
+        let cam = super::super::render::camera(&s, 8, 8);
+        let (r, _) = CameraRay::trace(&s, &cam, 27, 3, 9);
+        let (t0, t1) = r.medium.unwrap();
+        let pts: Vec<(usize, f64)> = r.march(1e-3).collect();
+        assert!(
+            !pts.is_empty() && pts.len() < ((t1 - t0) / 1e-3) as usize / 2,
+            "{}",
+            pts.len()
+        );
+        // (Between optical depths 745.2 and 746 e^{−τ} is already 0: kept, harmlessly.)
+        let sure = t0 + 745.0 / m.sigma_t.min_element();
+        assert!(
+            pts.iter()
+                .filter(|&&(_, t)| t < sure)
+                .all(|&(_, t)| m.transmittance(r.origin, r.dir, t).max_element() > 0.0)
+        );
+        let next = pts.last().unwrap().1 + 1e-3;
+        assert_eq!(m.transmittance(r.origin, r.dir, next), glam::DVec3::ZERO);
     }
 }

@@ -3,6 +3,7 @@
 //! Every triangle keeps the index of the shape it came from (its material).
 
 use crate::core::space::D3;
+use crate::limits::MAX_COORD;
 use crate::pipeline::bvh::Primitive;
 use glam::{DMat3, DVec3};
 use std::path::Path;
@@ -179,15 +180,111 @@ pub fn uv_sphere(bands: usize, segments: usize, shape: u32) -> Vec<Triangle> {
     tris
 }
 
+/// Every vertex line (`v x y z …`) of an OBJ text has three finite coordinates
+/// that lie within ±[`MAX_COORD`] once scaled and translated, and every face index
+/// refers to a vertex, texture coordinate or normal of the file; errors name the
+/// file and the line. (tobj would read `nan` or `1e39` as an f32 NaN or inf, and
+/// the triangles using it would silently vanish; an index of −2⁶³ overflows in it.)
+pub fn check_obj_text(file: &str, text: &str, scale: DVec3, translate: DVec3) -> Result<(), String> {
+    // Totals (positive indices may refer ahead) and counts so far (negative ones
+    // count back from the current line), for v, vt, vn.
+    let kinds = ["v", "vt", "vn"];
+    let mut total = [0i64; 3];
+    for line in text.lines() {
+        if let Some(k) = line
+            .split_whitespace()
+            .next()
+            .and_then(|w| kinds.iter().position(|&x| x == w))
+        {
+            total[k] += 1;
+        }
+    }
+    let mut seen = [0i64; 3];
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let at = || format!("`{file}` line {}", n + 1);
+        match words.next() {
+            Some("v") => {
+                seen[0] += 1;
+                check_vertex(&at(), words, scale, translate)?;
+            }
+            Some("vt") => seen[1] += 1,
+            Some("vn") => seen[2] += 1,
+            Some("f") => {
+                for w in words {
+                    for (k, part) in w.split('/').take(3).enumerate() {
+                        let ok = (part.is_empty() && k > 0)
+                            || part
+                                .parse::<i64>()
+                                .is_ok_and(|i| (1..=total[k]).contains(&i) || (-seen[k]..0).contains(&i));
+                        if !ok {
+                            return Err(format!(
+                                "{}: face index `{w}` refers to no {} of the file",
+                                at(),
+                                ["vertex", "texture coordinate", "normal"][k]
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn check_vertex<'a>(
+    at: &str,
+    mut words: impl Iterator<Item = &'a str>,
+    scale: DVec3,
+    translate: DVec3,
+) -> Result<(), String> {
+    for k in 0..3 {
+        let w = words
+            .next()
+            .ok_or_else(|| format!("{at}: a vertex needs three coordinates"))?;
+        let v: f64 = w
+            .parse()
+            .map_err(|_| format!("{at}: vertex coordinate `{w}` is not a number"))?;
+        if !v.is_finite() || v.abs() > f32::MAX as f64 {
+            return Err(format!("{at}: vertex coordinate `{w}` is not a finite number"));
+        }
+        let placed = v * scale[k] + translate[k];
+        if placed.abs() > MAX_COORD {
+            return Err(format!(
+                "{at}: the vertex lies at {placed:e} once scaled and translated, beyond ±{MAX_COORD:e}"
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Triangles of every model in an OBJ file, each vertex scaled then translated.
+/// Zero-area faces are dropped (they neither block nor emit light).
 pub fn load_obj(path: &Path, scale: DVec3, translate: DVec3, shape: u32) -> Result<Vec<Triangle>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot load `{}`: {e}", path.display()))?;
+    parse_obj(&bytes, &path.display().to_string(), scale, translate, shape)
+}
+
+/// [`load_obj`] on the bytes of an OBJ file named `file` (materials are not read:
+/// surfaces come from the scene).
+pub fn parse_obj(
+    bytes: &[u8],
+    file: &str,
+    scale: DVec3,
+    translate: DVec3,
+    shape: u32,
+) -> Result<Vec<Triangle>, String> {
+    check_obj_text(file, &String::from_utf8_lossy(bytes), scale, translate)?;
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| format!("cannot load `{}`: {e}", path.display()))?;
+    let no_materials = |_: &Path| Ok((Vec::new(), Default::default()));
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, no_materials)
+        .map_err(|e| format!("cannot load `{file}`: {e}"))?;
     let mut tris = Vec::new();
     for m in &models {
         let pos = &m.mesh.positions;
@@ -195,14 +292,14 @@ pub fn load_obj(path: &Path, scale: DVec3, translate: DVec3, shape: u32) -> Resu
             let k = 3 * i as usize;
             pos.get(k..k + 3)
                 .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * scale + translate)
-                .ok_or_else(|| format!("`{}`: vertex index {} out of range", path.display(), i + 1))
+                .ok_or_else(|| format!("`{file}`: vertex index {} out of range", i + 1))
         };
         for f in m.mesh.indices.chunks_exact(3) {
             tris.extend(Triangle::new(vertex(f[0])?, vertex(f[1])?, vertex(f[2])?, shape));
         }
     }
     if tris.is_empty() {
-        return Err(format!("`{}` has no triangles", path.display()));
+        return Err(format!("`{file}` has no triangles"));
     }
     Ok(tris)
 }
@@ -228,6 +325,35 @@ mod tests {
             let s: DVec3 = tris.iter().map(|t| t.normal * t.area).sum();
             assert!(s.length() < 1e-12);
         }
+    }
+
+    /// Bad OBJ text is an error naming the file and the line (issue 14: a NaN
+    /// vertex silently dropped its triangles; an index of −2⁶³ overflowed in tobj).
+    #[test]
+    fn bad_obj_text_names_file_and_line() {
+        let check = |text: &str| check_obj_text("m.obj", text, DVec3::ONE, DVec3::ZERO);
+        let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\n";
+        assert_eq!(check(&format!("{quad}f 1//1 2//1 3//-1 -1//1\n")), Ok(()));
+        for (text, want) in [
+            (
+                "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+                "`m.obj` line 2: vertex coordinate `nan`",
+            ),
+            ("v 0 1e39 0\n", "line 1: vertex coordinate `1e39` is not a finite"),
+            ("v 0 1\n", "line 1: a vertex needs three coordinates"),
+            (
+                &format!("{quad}f 1 2 5\n"),
+                "line 6: face index `5` refers to no vertex",
+            ),
+            (&format!("{quad}f 1 2 3//-9223372036854775808\n"), "refers to no normal"),
+            (&format!("{quad}f 1/1 2 3\n"), "refers to no texture coordinate"),
+            (&format!("{quad}f 0 1 2\n"), "face index `0`"),
+        ] {
+            let err = check(text).unwrap_err();
+            assert!(err.contains(want), "{err}");
+        }
+        let far = check_obj_text("m.obj", "v 2 0 0\n", DVec3::splat(1e12), DVec3::ZERO).unwrap_err();
+        assert!(far.contains("beyond ±1e12"), "{far}");
     }
 
     #[test]

@@ -163,8 +163,10 @@ impl RecordsFile {
                 f.format
             ));
         }
+        check_header(&f).map_err(|(path, why)| format!("{file}: at `{path}`: {why}"))?;
         let mut cache = RadianceCache::new();
         for (i, r) in f.records.iter().enumerate() {
+            check_record(r).map_err(|(path, why)| format!("{file}: at `records[{i}].{path}`: {why}"))?;
             let channels = r
                 .value
                 .map(|a| Taylor2::<D3>::new(a[0], DVec3::from_slice(&a[1..4]), DMat3::from_cols_slice(&a[4..])));
@@ -190,4 +192,82 @@ impl RecordsFile {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: {e}"))?;
         Self::parse(&text, &file)
     }
+}
+
+/// Largest |value| a record may carry, and may reach when extrapolated across its
+/// extent (|∇L|·r, |H|·r²): above any in-scattered radiance a valid scene gives
+/// (σ_s × phase × radiance ≤ 1.6·10³⁴, `crate::limits`) and below f32::MAX, so a
+/// reconstructed image fits its EXR.
+pub const MAX_RECORD_VALUE: f64 = 1e35;
+
+/// The header's numbers are in range (a problem: JSON path, why).
+fn check_header(f: &RecordsFile) -> Result<(), (String, String)> {
+    let v = &f.valid_for;
+    let side = |n: usize| n.min(u32::MAX as usize) as u32;
+    if let Some(why) = crate::limits::resolution_problem(side(v.width), side(v.height)) {
+        return Err(("valid_for.width".into(), format!("the image {why}")));
+    }
+    if !(v.march_step.is_finite() && v.march_step > 0.0) {
+        return Err((
+            "valid_for.march_step".into(),
+            format!("must be a positive distance, got {}", v.march_step),
+        ));
+    }
+    let (lo, hi) = crate::limits::EPS;
+    if !(f.eps.is_finite() && (lo..=hi).contains(&f.eps)) {
+        return Err((
+            "eps".into(),
+            format!("must lie between {lo:e} and {hi:e}, got {}", f.eps),
+        ));
+    }
+    if !(f.placement_seconds.is_finite() && f.placement_seconds >= 0.0) {
+        return Err((
+            "placement_seconds".into(),
+            format!("must be a finite duration, got {}", f.placement_seconds),
+        ));
+    }
+    Ok(())
+}
+
+/// A record's numbers are in range (a problem: JSON path within the record, why).
+fn check_record(r: &StoredRecord) -> Result<(), (String, String)> {
+    for (k, &x) in r.position.iter().enumerate() {
+        if !(x.is_finite() && x.abs() <= crate::limits::MAX_COORD) {
+            return Err((
+                format!("position[{k}]"),
+                format!("must lie within ±{:e}, got {x:e}", crate::limits::MAX_COORD),
+            ));
+        }
+    }
+    for (k, &x) in r.radii.iter().enumerate() {
+        if !(x.is_finite() && x > 0.0 && x <= 2.0 * crate::limits::MAX_COORD) {
+            return Err((
+                format!("radii[{k}]"),
+                format!("must be a positive finite length, got {x:e}"),
+            ));
+        }
+    }
+    let r_max = r.radii.iter().cloned().fold(0.0, f64::max);
+    for (c, channel) in r.value.iter().enumerate() {
+        for (k, &x) in channel.iter().enumerate() {
+            // [value, ∇ (3), H (9)]: each term's reach over the extent.
+            let reach = match k {
+                0 => x.abs(),
+                1..=3 => x.abs() * r_max,
+                _ => x.abs() * r_max * r_max,
+            };
+            if !(x.is_finite() && reach <= MAX_RECORD_VALUE) {
+                let what = match k {
+                    0 => "the value",
+                    1..=3 => "the gradient times the extent",
+                    _ => "the Hessian times the extent squared",
+                };
+                return Err((
+                    format!("value[{c}][{k}]"),
+                    format!("{what} must be finite and at most {MAX_RECORD_VALUE:e} in size, got {x:e}"),
+                ));
+            }
+        }
+    }
+    Ok(())
 }

@@ -174,6 +174,19 @@ impl Scene {
             r.resolution[1] as usize,
         );
         let scale = (bounds.max - bounds.min).length().max(1e-6);
+        // The description's points passed validation; the meshes' vertices (known
+        // only now) must keep the scene within reach of f64 too (crate::limits).
+        let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
+        if bounds.min.x <= bounds.max.x && reach > crate::limits::MAX_SIZES_FROM_ORIGIN * scale {
+            return Err(invalid(
+                file,
+                "shapes".into(),
+                format!(
+                    "the meshes place the scene ({scale:e} across) {reach:e} from the origin, more than {:e} of its sizes",
+                    crate::limits::MAX_SIZES_FROM_ORIGIN
+                ),
+            ));
+        }
         Ok(Scene {
             geometry: Geometry::new(triangles),
             desc,

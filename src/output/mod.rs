@@ -3,11 +3,18 @@
 //! Every writer goes through [`write_atomic`]: the bytes are written to a temporary
 //! file beside the destination and renamed over it, so an interrupted run (Ctrl-C,
 //! a crash, a full disk) never leaves a truncated file in place of a good one.
-//! Errors name the path.
+//! Errors name the path. The outputs of one run are checked against its inputs and
+//! each other first ([`OutputPlan`]) and written as a set whose JSON summary, written
+//! last, names every file with its hash ([`write_set`]).
 //!
 //! EXR files hold linear RGB as 32-bit floats (ZIP-compressed scanlines, lossless);
 //! row 0 of a [`Field`] (its top row) is the EXR's first scanline, as image viewers
 //! expect. Pixels where the field is undefined (`valid == false`) are written as 0.
+
+mod plan;
+mod set;
+pub use plan::{OutputPlan, PlanError};
+pub use set::{SetError, WrittenFile, clean_stale_temps, write_set};
 
 use crate::flatland::field::Field;
 use anyhow::{Context, anyhow};
@@ -30,16 +37,20 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}-{n}.tmp", std::process::id()))
 }
 
-/// Write `bytes` to `path` atomically: create the parent directories, write a
-/// temporary file in the same directory, then rename it over `path`. On failure the
-/// temporary file is removed and any previous `path` is left untouched.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+/// Write `bytes` to a new temporary file beside `path` (creating the parent
+/// directories, and removing stale temporary files of dead writers there first);
+/// returns its path. On failure nothing is left behind.
+pub(crate) fn write_temp(path: &Path, bytes: &[u8]) -> std::io::Result<PathBuf> {
     if path.file_name().is_none() {
-        return Err(anyhow!("{}: not a file path", path.display()));
+        return Err(std::io::Error::other("not a file path"));
     }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the directory", dir.display()))?;
-    }
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)
+        .map_err(|e| std::io::Error::other(format!("cannot create the directory {}: {e}", dir.display())))?;
+    set::clean_stale_temps(dir);
     let tmp = temp_path(path);
     let written = (|| -> std::io::Result<()> {
         let mut f = std::fs::File::create(&tmp)?;
@@ -48,8 +59,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     })();
     if let Err(e) = written {
         let _ = std::fs::remove_file(&tmp);
-        return Err(anyhow!("{}: cannot write: {e}", path.display()));
+        return Err(std::io::Error::other(format!("cannot write: {e}")));
     }
+    Ok(tmp)
+}
+
+/// Write `bytes` to `path` atomically: create the parent directories, write a
+/// temporary file in the same directory, then rename it over `path`. On failure the
+/// temporary file is removed and any previous `path` is left untouched.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = write_temp(path, bytes).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     if let Err(e) = std::fs::rename(&tmp, path) {
         let _ = std::fs::remove_file(&tmp);
         return Err(anyhow!("{}: cannot replace the file: {e}", path.display()));
@@ -84,6 +103,16 @@ pub fn encode_exr(field: &Field) -> anyhow::Result<Vec<u8>> {
             field.valid.len()
         ));
     }
+    // An EXR holds f32: a value outside its range would be written as inf (the
+    // validated scene ranges keep radiance far below; this guards against a bug).
+    if let Some(k) = (0..w * h).find(|&k| field.valid[k] && !fits_f32(field.values[k])) {
+        return Err(anyhow!(
+            "pixel ({}, {}) holds {:?}, outside the f32 range of an EXR",
+            k % w,
+            k / w,
+            field.values[k].to_array()
+        ));
+    }
     let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
         let k = y * w + x;
         if field.valid[k] {
@@ -105,6 +134,10 @@ pub fn encode_exr(field: &Field) -> anyhow::Result<Vec<u8>> {
         .to_buffered(&mut cursor)
         .map_err(|e| anyhow!("cannot encode the EXR: {e}"))?;
     Ok(cursor.into_inner())
+}
+
+fn fits_f32(v: crate::core::color::Rgb) -> bool {
+    v.to_array().iter().all(|c| c.is_finite() && c.abs() <= f32::MAX as f64)
 }
 
 /// Write a field as a linear RGB float32 EXR (row 0 = top scanline; invalid
@@ -150,7 +183,8 @@ mod tests {
     use crate::core::color::Rgb;
     use glam::DVec2;
 
-    fn entries(dir: &Path) -> Vec<String> {
+    /// The names in a folder, sorted (the submodules' tests use it too).
+    pub(super) fn entries(dir: &Path) -> Vec<String> {
         let mut v: Vec<String> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
