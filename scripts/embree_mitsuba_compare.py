@@ -50,9 +50,9 @@ def uv_sphere(bands=200, segments=399):
     for a in range(bands):
         for b in range(segments):
             if a + 1 < bands:
-                tris.append((idx(a, b), idx(a + 1, b), idx(a + 1, b + 1)))
+                tris.append((idx(a, b), idx(a + 1, b + 1), idx(a + 1, b)))
             if a > 0:
-                tris.append((idx(a, b), idx(a + 1, b + 1), idx(a, b + 1)))
+                tris.append((idx(a, b), idx(a, b + 1), idx(a + 1, b + 1)))
     return v.reshape(-1, 3).astype(np.float32), np.array(tris, dtype=np.int32)
 
 

@@ -170,10 +170,10 @@ pub fn uv_sphere(bands: usize, segments: usize, shape: u32) -> Vec<Triangle> {
             let (a, b) = (vertex(i, j), vertex(i, j + 1));
             let (c, d) = (vertex(i + 1, j), vertex(i + 1, j + 1));
             if i + 1 < bands {
-                tris.extend(Triangle::new(a, c, d, shape));
+                tris.extend(Triangle::new(a, d, c, shape));
             }
             if i > 0 {
-                tris.extend(Triangle::new(a, d, b, shape));
+                tris.extend(Triangle::new(a, b, d, shape));
             }
         }
     }
