@@ -20,6 +20,9 @@ use volcache::pipeline::path::{Query, Settings, estimate};
 pub enum BenchCommand {
     /// Ray–segment queries/s (with and without the BVH) and path samples/s.
     Flatland(FlatlandBench),
+    /// 3D closest-hit and occlusion rays/s (a 158,802-triangle sphere and the shipped
+    /// scenes, one thread and all) and BVH build times.
+    Rays3d(super::bench_rays3d::Rays3dBench),
     /// Cost of one cache point: plain value, unaware and aware derivatives, per N.
     Derivatives(super::bench_derivs::DerivBench),
     /// Error vs time and vs cache count: ours, jarosz08 (ε swept) and pt (spp swept).
@@ -49,9 +52,15 @@ struct RayFigures {
     scene: String,
     segments: usize,
     accel: String,
+    /// Seconds to build the acceleration structure (best of five, one thread).
+    build_seconds: f64,
     queries: u64,
     seconds: f64,
     queries_per_second_one_thread: f64,
+    queries_per_second_all_threads: f64,
+    /// Occlusion queries (length 2, a quarter of the forest's width).
+    occluded_per_second_one_thread: f64,
+    occluded_per_second_all_threads: f64,
 }
 
 #[derive(Serialize)]
@@ -84,6 +93,7 @@ struct Report {
 pub fn run(cmd: BenchCommand) -> anyhow::Result<ExitCode> {
     match cmd {
         BenchCommand::Flatland(b) => flatland(b),
+        BenchCommand::Rays3d(b) => super::bench_rays3d::run(b),
         BenchCommand::Derivatives(b) => super::bench_derivs::run(b),
         BenchCommand::Tradeoff(b) => super::bench_tradeoff::run(b),
         BenchCommand::Tradeoff3d(b) => super::bench_tradeoff3d::run(b),
@@ -102,18 +112,23 @@ fn random_rays(scene: &Scene, n: usize) -> Vec<(DVec2, DVec2)> {
         .collect()
 }
 
-fn time_queries(set: &SegmentSet, rays: &[(DVec2, DVec2)], seconds: f64) -> (u64, f64) {
+/// Queries per second over `rays` (repeated for about `seconds`) on the current
+/// rayon pool: closest hits, or occlusion up to the closest hit's distance when
+/// `occlusion` (a shadow ray between two points, visible or not).
+fn time_queries(set: &SegmentSet, rays: &[(DVec2, DVec2)], seconds: f64, occlusion: bool) -> (u64, f64) {
     let start = Instant::now();
     let mut n = 0u64;
     let mut hits = 0u64;
-    'outer: loop {
-        for &(o, d) in rays {
-            hits += set.closest_hit(o, d, 0.0, f64::INFINITY, None).is_some() as u64;
-            n += 1;
-            if n.is_multiple_of(1024) && start.elapsed().as_secs_f64() > seconds {
-                break 'outer;
-            }
-        }
+    while n == 0 || start.elapsed().as_secs_f64() < seconds {
+        hits += rays
+            .par_iter()
+            .with_min_len(1024)
+            .map(|&(o, d)| match occlusion {
+                false => set.closest_hit(o, d, 0.0, f64::INFINITY, None).is_some() as u64,
+                true => set.occluded(o, d, 0.0, 2.0, None) as u64,
+            })
+            .sum::<u64>();
+        n += rays.len() as u64;
     }
     std::hint::black_box(hits);
     (n, start.elapsed().as_secs_f64())
@@ -122,23 +137,52 @@ fn time_queries(set: &SegmentSet, rays: &[(DVec2, DVec2)], seconds: f64) -> (u64
 fn flatland(b: FlatlandBench) -> anyhow::Result<ExitCode> {
     let many = load_scene(Some(&b.many))?;
     let rays = random_rays(&many, 100_000);
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let mut ray_casting = Vec::new();
     for accel in [Accel::Bvh, Accel::Linear] {
-        let set = SegmentSet::with_accel(many.geometry.prims.clone(), accel);
-        let (n, secs) = time_queries(&set, &rays, b.seconds);
+        let build = || {
+            let start = Instant::now();
+            let set = SegmentSet::with_accel(many.geometry.prims.clone(), accel);
+            (start.elapsed().as_secs_f64(), set)
+        };
+        let (build_seconds, set) = one.install(|| {
+            (0..5)
+                .map(|_| build())
+                .reduce(|a, b| (a.0.min(b.0), b.1))
+                .expect("five builds")
+        });
+        // The flat list is ~10x slower: a tenth of the time gives as many digits.
+        let t = if accel == Accel::Bvh {
+            b.seconds
+        } else {
+            b.seconds / 4.0
+        };
+        let (n, secs) = one.install(|| time_queries(&set, &rays, t, false));
+        let (na, sa) = time_queries(&set, &rays, t / 2.0, false);
+        let (no, so) = one.install(|| time_queries(&set, &rays, t / 2.0, true));
+        let (noa, soa) = time_queries(&set, &rays, t / 2.0, true);
         let f = RayFigures {
             scene: b.many.display().to_string(),
             segments: set.len(),
             accel: format!("{accel:?}"),
+            build_seconds,
             queries: n,
             seconds: secs,
             queries_per_second_one_thread: n as f64 / secs,
+            queries_per_second_all_threads: na as f64 / sa,
+            occluded_per_second_one_thread: no as f64 / so,
+            occluded_per_second_all_threads: noa as f64 / soa,
         };
         println!(
-            "ray casting, {} segments, {:?}: {:.3} M queries/s (1 thread)",
+            "ray casting, {} segments, {:?} (build {:.2e} s): closest hit {:.3} M queries/s (1 thread), {:.3} M/s ({} threads); occluded {:.3} / {:.3} M/s",
             f.segments,
             accel,
-            f.queries_per_second_one_thread / 1e6
+            f.build_seconds,
+            f.queries_per_second_one_thread / 1e6,
+            f.queries_per_second_all_threads / 1e6,
+            rayon::current_num_threads(),
+            f.occluded_per_second_one_thread / 1e6,
+            f.occluded_per_second_all_threads / 1e6,
         );
         ray_casting.push(f);
     }
@@ -166,8 +210,8 @@ fn flatland(b: FlatlandBench) -> anyhow::Result<ExitCode> {
             })
             .collect::<Vec<_>>();
         let t = b.seconds / 8.0;
-        let (nb, sb) = time_queries(&set(Accel::Bvh), &rays, t);
-        let (nl, sl) = time_queries(&set(Accel::Linear), &rays, t);
+        let (nb, sb) = one.install(|| time_queries(&set(Accel::Bvh), &rays, t, false));
+        let (nl, sl) = one.install(|| time_queries(&set(Accel::Linear), &rays, t, false));
         let c = Crossover {
             segments: n,
             bvh_queries_per_second: nb as f64 / sb,

@@ -101,13 +101,20 @@ pub fn intersect_segment(o: DVec2, d: DVec2, a: DVec2, b: DVec2, t_min: f64, t_m
 }
 
 impl Primitive<D2> for Segment {
+    /// The end points (the intersection reads nothing else).
+    type Leaf = [DVec2; 2];
+
     fn bounds(&self) -> (DVec2, DVec2) {
         (self.a.min(self.b), self.a.max(self.b))
     }
 
+    fn leaf(&self) -> [DVec2; 2] {
+        [self.a, self.b]
+    }
+
     #[inline]
-    fn intersect(&self, o: DVec2, d: DVec2, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
-        intersect_segment(o, d, self.a, self.b, t_min, t_max).map(|(t, u)| (t, u, 0.0))
+    fn intersect_leaf(&[a, b]: &[DVec2; 2], o: DVec2, d: DVec2, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
+        intersect_segment(o, d, a, b, t_min, t_max).map(|(t, u)| (t, u, 0.0))
     }
 }
 

@@ -8,6 +8,8 @@
 //! files, cameras or images.
 
 pub mod bvh;
+mod bvh_build;
+mod bvh_wide;
 pub mod derivatives;
 pub mod dim;
 pub mod directions;

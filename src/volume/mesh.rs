@@ -26,14 +26,27 @@ pub struct Triangle {
 pub use crate::pipeline::world::Hit;
 
 impl Primitive<D3> for Triangle {
+    /// p0, e1 and e2: what the intersection reads.
+    type Leaf = [DVec3; 3];
+
     fn bounds(&self) -> (DVec3, DVec3) {
         let [a, b, c] = self.vertices();
         (a.min(b).min(c), a.max(b).max(c))
     }
 
+    fn leaf(&self) -> [DVec3; 3] {
+        [self.p0, self.e1, self.e2]
+    }
+
     #[inline]
-    fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
-        Triangle::intersect(self, o, d, t_min, t_max)
+    fn intersect_leaf(
+        &[p0, e1, e2]: &[DVec3; 3],
+        o: DVec3,
+        d: DVec3,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(f64, f64, f64)> {
+        moller_trumbore(p0, e1, e2, o, d, t_min, t_max)
     }
 }
 
@@ -65,24 +78,7 @@ impl Triangle {
     /// Möller–Trumbore: (t, u, v) for t in (t_min, t_max), both faces.
     #[inline]
     pub fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<(f64, f64, f64)> {
-        let p = d.cross(self.e2);
-        let det = self.e1.dot(p);
-        if det == 0.0 {
-            return None;
-        }
-        let inv = 1.0 / det;
-        let s = o - self.p0;
-        let u = s.dot(p) * inv;
-        if !(0.0..=1.0).contains(&u) {
-            return None;
-        }
-        let q = s.cross(self.e1);
-        let v = d.dot(q) * inv;
-        if v < 0.0 || u + v > 1.0 {
-            return None;
-        }
-        let t = self.e2.dot(q) * inv;
-        (t > t_min && t < t_max).then_some((t, u, v))
+        moller_trumbore(self.p0, self.e1, self.e2, o, d, t_min, t_max)
     }
 
     /// A uniformly distributed point for (ξ1, ξ2) in [0, 1)².
@@ -90,6 +86,38 @@ impl Triangle {
         let s = xi1.sqrt();
         self.point_at(s * (1.0 - xi2), s * xi2)
     }
+}
+
+/// Möller–Trumbore for the triangle p0 + u·e1 + v·e2 (the one test of both the
+/// triangle and the BVH's leaf copy of it, so their answers are the same bits).
+#[inline]
+fn moller_trumbore(
+    p0: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+    o: DVec3,
+    d: DVec3,
+    t_min: f64,
+    t_max: f64,
+) -> Option<(f64, f64, f64)> {
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - p0;
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = e2.dot(q) * inv;
+    (t > t_min && t < t_max).then_some((t, u, v))
 }
 
 /// The two triangles of the parallelogram origin + s·u + t·v.
@@ -123,6 +151,33 @@ pub fn cuboid(min: DVec3, max: DVec3, rotate_y_deg: f64, shape: u32) -> Vec<Tria
         .iter()
         .flat_map(|&(o, pu, pv)| quad(o, pu - o, pv - o, shape))
         .collect()
+}
+
+/// A UV sphere of unit radius at the origin: `bands` rings of latitude, `segments`
+/// of longitude, one triangle per segment in the two polar bands and two elsewhere
+/// (2·segments·(bands − 1) triangles, counter-clockwise seen from outside). The ray
+/// benchmark's mesh: 200 × 399 gives 158,802 triangles; `scripts/embree_mitsuba_compare.py`
+/// builds the same vertices for Embree.
+pub fn uv_sphere(bands: usize, segments: usize, shape: u32) -> Vec<Triangle> {
+    let vertex = |i: usize, j: usize| {
+        let theta = std::f64::consts::PI * i as f64 / bands as f64;
+        let phi = std::f64::consts::TAU * j as f64 / segments as f64;
+        DVec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+    };
+    let mut tris = Vec::with_capacity(2 * segments * bands.saturating_sub(1));
+    for i in 0..bands {
+        for j in 0..segments {
+            let (a, b) = (vertex(i, j), vertex(i, j + 1));
+            let (c, d) = (vertex(i + 1, j), vertex(i + 1, j + 1));
+            if i + 1 < bands {
+                tris.extend(Triangle::new(a, d, c, shape));
+            }
+            if i > 0 {
+                tris.extend(Triangle::new(a, b, d, shape));
+            }
+        }
+    }
+    tris
 }
 
 /// Every vertex line (`v x y z …`) of an OBJ text has three finite coordinates
@@ -325,6 +380,15 @@ mod tests {
         }
         let far = check_obj_text("m.obj", "v 2 0 0\n", DVec3::splat(1e12), DVec3::ZERO).unwrap_err();
         assert!(far.contains("beyond ±1e12"), "{far}");
+    }
+
+    #[test]
+    fn uv_sphere_is_closed_and_sized() {
+        let tris = uv_sphere(200, 399, 0);
+        assert_eq!(tris.len(), 158_802);
+        let s: DVec3 = tris.iter().map(|t| t.normal * t.area).sum();
+        assert!(s.length() < 1e-9, "not closed: {s}");
+        assert!(tris.iter().all(|t| t.normal.dot(t.p0 + (t.e1 + t.e2) / 3.0) > 0.0));
     }
 
     #[test]
