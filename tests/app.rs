@@ -3,13 +3,12 @@
 
 mod app_common;
 
-use app_common::{click_world, harness, press, step_until, workbench};
+use app_common::{click_world, harness, press, step_until, tiny_compare, workbench};
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use glam::DVec2;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use volcache::app::Workbench;
 use volcache::app::compare::{CompareKey, CompareParams, METHODS, compare_command, spawn_compare};
 use volcache::app::jobs::no_notify;
 use volcache::app::overlay::Overlay;
@@ -17,17 +16,6 @@ use volcache::flatland::cached_field::CacheMethod;
 use volcache::flatland::field::FieldParams;
 use volcache::flatland::scene::Scene;
 use volcache::flatland::scene_desc::Quantity;
-
-/// A comparison small enough for tests (12×12, a handful of records).
-fn tiny_compare(wb: &mut Workbench) {
-    wb.compare_params = CompareParams {
-        caches: 6,
-        rays: 24,
-        steps: 2,
-        res: Some([12, 12]),
-        ref_spp: 4,
-    };
-}
 
 #[test]
 fn starts_on_the_default_scene_and_refines_the_field() {

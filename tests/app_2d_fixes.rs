@@ -4,12 +4,11 @@
 
 mod app_common;
 
-use app_common::{click_world, harness, harness_sized, step_until, workbench};
+use app_common::{click_world, harness, harness_sized, step_until, tiny_compare, workbench};
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use glam::DVec2;
 use std::sync::Arc;
-use volcache::app::compare::CompareParams;
 use volcache::app::layout::MIN_CANVAS_WIDTH;
 use volcache::app::overlay::Overlay;
 use volcache::figure::{FieldStyle, field_to_rgba};
@@ -89,13 +88,7 @@ fn save_writes_only_a_named_file() {
 #[test]
 fn results_of_an_older_scene_are_dropped_when_it_changes() {
     let mut wb = workbench();
-    wb.compare_params = CompareParams {
-        caches: 6,
-        rays: 24,
-        steps: 2,
-        res: Some([12, 12]),
-        ref_spp: 4,
-    };
+    tiny_compare(&mut wb);
     wb.overlays.set(Overlay::Gradients, true);
     wb.show_compare = true;
     wb.probe = Some(DVec2::new(0.1, -0.3));

@@ -65,3 +65,14 @@ pub fn click_world(h: &mut Harness<'_, Workbench>, p: DVec2) {
     let pos = h.state().screen_pos(p).expect("the canvas was drawn");
     click_at(h, pos);
 }
+
+/// A comparison small enough for tests (12×12, a handful of records).
+pub fn tiny_compare(wb: &mut Workbench) {
+    wb.compare_params = volcache::app::compare::CompareParams {
+        caches: 6,
+        rays: 24,
+        steps: 2,
+        res: Some([12, 12]),
+        ref_spp: 4,
+    };
+}
