@@ -13,6 +13,7 @@ use super::dim::Dim;
 use super::path::{Estimate, Parts, Query, Settings, estimate};
 use super::probe::{LightField, Outgoing};
 use super::proxy::{Element, ElementKind, RadianceRule};
+use super::slide;
 use super::world::{DirectLight, World};
 use crate::core::color::Rgb;
 use crate::core::distance::distance;
@@ -161,6 +162,17 @@ pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp
 /// One proxy element's contribution σ_s f T L F with its derivatives.
 pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp: f64) -> TaylorRgb<S> {
     let soft = near_distance(e.size());
+    if let (ElementKind::Surface, Some(plane)) = (e.kind, e.far_plane) {
+        // An occlusion boundary: f·T by the vertex rule with the near vertices
+        // sliding on the far surface (see `slide`).
+        let ft = slide::phase_transmittance(lf, e, plane, soft);
+        let s = lf.sigma_s;
+        return TaylorRgb::tint(S::form_factor_clamped(e.v, lf.x, 0.0), e.radiance).mul_channels([
+            ft[0] * s.x,
+            ft[1] * s.y,
+            ft[2] * s.z,
+        ]);
+    }
     let phase = phase_taylor_out::<S>(lf.g, lf.x, e.anchor, lf.outgoing(), soft);
     element_incident(lf, e, medium_clamp).mul_channels([
         phase * lf.sigma_s.x,

@@ -24,6 +24,7 @@ pub mod proxy;
 pub mod record;
 pub mod sensor;
 pub mod silhouette;
+pub mod slide;
 #[cfg(test)]
 mod testing;
 pub mod world;

@@ -67,6 +67,10 @@ pub struct Element<S: Dim> {
     pub bridging: bool,
     /// Angle (solid angle) of the element's directions, 2π/N (4π/2N) on average.
     pub dir_measure: f64,
+    /// For a bridging surface element under the farther rule: the far surface's
+    /// tangent plane (a point on it, its normal), onto which the near vertices slide
+    /// as x moves ([`super::slide`]).
+    pub far_plane: Option<(S::Vec, S::Vec)>,
 }
 
 impl<S: Dim> crate::core::metric::Radiant for Element<S> {
@@ -118,6 +122,7 @@ fn make<S: Dim>(
         kind,
         bridging,
         dir_measure,
+        far_plane: None,
     }
 }
 
@@ -180,7 +185,17 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
         // vertex's values are first order, and where vertices are near x their
         // angles move fast: the gradient grew as 1/d next to a surface at g = 0.99).
         let rule = if bridging { rule } else { RadianceRule::Average };
-        out.push(make(x, v, rule, ElementKind::Surface, bridging, measure(t)));
+        let mut e = make(x, v, rule, ElementKind::Surface, bridging, measure(t));
+        if bridging && rule == RadianceRule::Farther {
+            let far = (0..S::DIM)
+                .max_by(|&i, &j| v.as_ref()[i].1.total_cmp(&v.as_ref()[j].1))
+                .expect("a simplex has vertices");
+            e.far_plane = lf.rays[t.as_ref()[far] as usize]
+                .hit
+                .as_ref()
+                .map(|h| (v.as_ref()[far].0, h.normal));
+        }
+        out.push(e);
     }
     let shells = lf.rays.iter().map(|r| r.samples.len()).max().unwrap_or(0);
     for t in &lf.simplices {

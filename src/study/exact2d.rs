@@ -17,7 +17,7 @@ use crate::core::taylor_rgb::TaylorRgb;
 use crate::flatland::geometry::cross;
 use crate::flatland::scene::Scene;
 use crate::pipeline::world::World;
-use glam::{DMat2, DVec2};
+use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 
 /// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the Legendre recurrence).
@@ -93,19 +93,8 @@ pub fn single_scattering(scene: &Scene, x: DVec2, omega_o: DVec2) -> Rgb {
 /// step `h` (the 9-point stencil of theory.md §5; exact to O(h²) where no visibility
 /// event is within h).
 pub fn derivatives(scene: &Scene, x: DVec2, omega_o: DVec2, h: f64) -> TaylorRgb<D2> {
-    let at = |i: f64, j: f64| single_scattering(scene, x + DVec2::new(i, j) * h, omega_o);
-    let (c, px, mx, py, my) = (at(0.0, 0.0), at(1.0, 0.0), at(-1.0, 0.0), at(0.0, 1.0), at(0.0, -1.0));
-    let (pp, pm, mp, mm) = (at(1.0, 1.0), at(1.0, -1.0), at(-1.0, 1.0), at(-1.0, -1.0));
-    let channel = |k: usize| {
-        let grad = DVec2::new(px[k] - mx[k], py[k] - my[k]) / (2.0 * h);
-        let hxx = (px[k] - 2.0 * c[k] + mx[k]) / (h * h);
-        let hyy = (py[k] - 2.0 * c[k] + my[k]) / (h * h);
-        let hxy = (pp[k] - pm[k] - mp[k] + mm[k]) / (4.0 * h * h);
-        Taylor2::new(c[k], grad, DMat2::from_cols_array(&[hxx, hxy, hxy, hyy]))
-    };
-    TaylorRgb {
-        channels: [channel(0), channel(1), channel(2)],
-    }
+    let channels = Taylor2::central_differences(|p| single_scattering(scene, p, omega_o).to_array(), x, h);
+    TaylorRgb { channels }
 }
 
 #[cfg(test)]

@@ -1,0 +1,100 @@
+//! Phase × transmittance over a bridging surface element, with its near vertices
+//! sliding on the far surface (issue 12 item 2).
+//!
+//! A bridging element spans the directions between an occluder's edge e (near) and
+//! a point p of the surface behind it (far). What it stands for is the far surface
+//! seen between the two directions: ∫ L f T dθ from the direction of e to that of
+//! p. Evaluating f·T at p alone (a one-point rule) errs by O(Δθ²)·∂_θ(fT); that is
+//! harmless for the value and the gradient, but the rule's error has a second
+//! derivative of order (∇Δθ)² ∂_θ(fT), and ∇Δθ does not shrink with Δθ, because e
+//! is near x and its direction turns fast: a floor of the Hessian at occlusion
+//! boundaries that more rays do not lower (measured 12% median, 21% p90 at σ_t 1–2,
+//! g = 0.6 / −0.5; it vanishes where f·T is constant).
+//!
+//! The vertex rule (the mean of f·T over the element's vertices, second order)
+//! evaluates each near vertex at the point y(x) of the far surface behind it, on the
+//! line from x through e, which slides as x moves: y = x + t (e − x), with t such
+//! that y lies in the far surface's tangent plane. Its derivatives carry the slide,
+//! which is what the exact boundary term has. f·T(x, y(x)) is a closed form whose
+//! chain rule through y(x) is long; its derivatives come from central differences
+//! with a step far below its scales (O(h²) ≈ 1e-6 relative), deterministic.
+
+use super::dim::Dim;
+use super::probe::LightField;
+use super::proxy::Element;
+use super::silhouette::BRIDGE_RATIO;
+use crate::core::color::Rgb;
+use crate::core::phase::{Outgoing, hg_of_mu, phase_taylor_out};
+use crate::core::taylor::Taylor2;
+use crate::core::transmittance::transmittance_taylor_rgb;
+
+/// The point of the plane (`p`, `n`) on the line from `x` through `e`, beyond `e`
+/// and not much farther than the plane's point; `None` when the line grazes it.
+fn slid<S: Dim>(x: S::Vec, e: S::Vec, p: S::Vec, n: S::Vec) -> Option<S::Vec> {
+    let (num, den) = (S::dot(n, p - x), S::dot(n, e - x));
+    let t = num / den;
+    let y = x + (e - x) * t;
+    let ok = t.is_finite() && t >= 1.0 && S::length(y - x) <= 4.0 * S::length(p - x);
+    ok.then_some(y)
+}
+
+/// f(−ω·ω_o) T(|y − x|) per channel, for light from `y` received at `x`.
+fn phase_transmittance_at<S: Dim>(lf: &LightField<S>, x: S::Vec, y: S::Vec) -> [f64; 3] {
+    let r = S::length(y - x);
+    let u = (y - x) / r;
+    let w = match lf.outgoing() {
+        Outgoing::Direction(w) => w / S::length(w),
+        Outgoing::TowardsPoint(eye) => (eye - x) / S::length(eye - x),
+    };
+    let f = hg_of_mu::<S>(lf.g, -S::dot(u, w)).0;
+    let t: Rgb = (-lf.sigma_t * r).exp();
+    [f * t.x, f * t.y, f * t.z]
+}
+
+/// The vertex rule's f·T over a bridging element whose far surface's tangent plane
+/// is (`p`, `n`), per channel, with derivatives in x.
+pub fn phase_transmittance<S: Dim>(
+    lf: &LightField<S>,
+    e: &Element<S>,
+    (p, n): (S::Vec, S::Vec),
+    soft: f64,
+) -> [Taylor2<S>; 3] {
+    let x = lf.x;
+    let v = e.v.as_ref();
+    let dmax = v.iter().map(|&q| S::length(q - x)).fold(0.0, f64::max);
+    let fixed = |a: S::Vec| {
+        let f = phase_taylor_out::<S>(lf.g, x, a, lf.outgoing(), soft);
+        transmittance_taylor_rgb::<S>(lf.sigma_t, x, a, soft).map(|t| t * f)
+    };
+    let mut sum = [Taylor2::zero(); 3];
+    for &q in v {
+        let d = S::length(q - x);
+        let near = dmax - d > BRIDGE_RATIO * d;
+        let term = match slid::<S>(x, q, p, n).filter(|_| near) {
+            Some(y) => {
+                // Below the scales of f (angle 1 − |g| seen from e's distance) and
+                // of T (σ_t times y's motion, r_y/r_e per unit of x).
+                let r_y = S::length(y - x);
+                let sigma = lf.sigma_t.max_element();
+                let scale = (d * (1.0 - lf.g.abs()).max(1e-3)).min(d / (sigma * r_y).max(1e-12));
+                let h = 1e-3 * scale;
+                Taylor2::central_differences(
+                    |xp| match slid::<S>(xp, q, p, n) {
+                        Some(yp) => phase_transmittance_at(lf, xp, yp),
+                        None => phase_transmittance_at(lf, xp, y),
+                    },
+                    x,
+                    h,
+                )
+            }
+            // Far vertices are points of the far surface already.
+            None if !near => fixed(q),
+            // A grazing far plane: the far vertex stands in for the slid point.
+            None => fixed(p),
+        };
+        for c in 0..3 {
+            sum[c] = sum[c] + term[c];
+        }
+    }
+    sum.map(|s| s * (1.0 / v.len() as f64))
+}
