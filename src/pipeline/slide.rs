@@ -93,7 +93,7 @@ pub fn phase_transmittance<S: Dim>(
             None => fixed(p),
         };
         for c in 0..3 {
-            sum[c] = sum[c] + term[c];
+            sum[c] += term[c];
         }
     }
     sum.map(|s| s * (1.0 / v.len() as f64))
