@@ -21,7 +21,7 @@ use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 
 /// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the Legendre recurrence).
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+pub(crate) fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
     (0..n)
         .map(|i| {
             let mut z = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();

@@ -4,6 +4,8 @@
 //!
 //! - [`exact2d`]: exact single scattering in flatland (visibility intervals +
 //!   Gauss–Legendre) and its derivatives, to judge estimators by.
+//! - [`exact3d`]: the same in 3D (emitter polygons minus the occluders' central
+//!   projections, collapsed Gauss–Legendre on the pieces).
 //! - [`seeds`]: the seeds of an experiment's parts (reference, path tracing,
 //!   gradient points) from the one seed the user gives.
 //! - [`stored`]: the on-disk reference store (key, full-precision images);
@@ -20,6 +22,7 @@
 //!   [`gradient_summary`]: its errors against the reference.
 
 pub mod exact2d;
+pub mod exact3d;
 pub mod field_runs;
 pub mod gradient_summary;
 pub mod gradients;
