@@ -251,7 +251,7 @@ fn a_compare_run_finishes_with_finite_numbers_for_both_methods() {
     h.step();
     assert!(h.state().show_compare);
     h.run_steps(3); // a new window's first frame only measures it
-    h.get_by_label_contains("equal cache count: 6 records of 24 rays");
+    h.get_by_label_contains("equal cache count: 16 records of 24 rays");
     step_until(&mut h, "the comparison", |w| w.compare_done());
     let res = h.state().compare_result().unwrap().clone();
     assert_eq!((res.fp.width, res.fp.height), (12, 12));
@@ -267,7 +267,7 @@ fn a_compare_run_finishes_with_finite_numbers_for_both_methods() {
     let command = h.state_mut().compare_command().unwrap();
     assert_eq!(
         command,
-        "volcache figure compare --caches 6 --rays 24 --steps 2 --res 12x12 --ref-spp 4 --seed 1 --out out/compare"
+        "volcache figure compare --caches 16 --rays 24 --steps 2 --res 12x12 --ref-spp 4 --seed 1 --out out/compare"
     );
     // The command reproduces the records and errors headless.
     let dir = tempfile::tempdir().unwrap();
@@ -388,7 +388,7 @@ fn params_follow_the_app_resolution_unless_set() {
 fn a_tiny_comparison_runs_both_methods() {
     let scene = Arc::new(Scene::default_scene());
     let params = CompareParams {
-        caches: 6,
+        caches: 16,
         rays: 24,
         steps: 2,
         res: Some([12, 12]),
