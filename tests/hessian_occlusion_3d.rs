@@ -93,6 +93,8 @@ fn penumbra_points(scene: &Scene, lo: DVec3, hi: DVec3, want: usize) -> Vec<DVec
     out
 }
 
+type SceneFn = fn(f64, f64) -> Scene;
+
 /// Relative gradient and Hessian errors of the aware single part at `x`.
 fn errors(scene: &Scene, x: DVec3, omega_o: DVec3, rays: usize, seed: u64) -> (f64, f64) {
     let exact = exact3d::derivatives(scene, x, omega_o, 1e-4).luminance();
@@ -118,7 +120,7 @@ fn errors(scene: &Scene, x: DVec3, omega_o: DVec3, rays: usize, seed: u64) -> (f
 #[test]
 fn derivatives_at_3d_penumbrae() {
     let omega_o = DVec3::new(0.48, -0.6, 0.64);
-    let rows: [(&str, fn(f64, f64) -> Scene, f64, f64, DVec3, DVec3); 2] = [
+    let rows: [(&str, SceneFn, f64, f64, DVec3, DVec3); 2] = [
         (
             "A",
             scene_a,

@@ -10,6 +10,7 @@ pub mod free_flight;
 pub mod metric;
 pub mod mis;
 pub mod phase;
+pub mod phase_arc;
 pub mod rng;
 pub mod roulette;
 pub mod space;

@@ -162,23 +162,27 @@ pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp
 /// One proxy element's contribution σ_s f T L F with its derivatives.
 pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp: f64) -> TaylorRgb<S> {
     let soft = near_distance(e.size());
-    if let (ElementKind::Surface, Some(plane)) = (e.kind, e.far_plane) {
-        // An occlusion boundary: f·T by the vertex rule with the near vertices
-        // sliding on the far surface (see `slide`).
-        let ft = slide::phase_transmittance(lf, e, plane, soft);
-        let s = lf.sigma_s;
-        return TaylorRgb::tint(S::form_factor_clamped(e.v, lf.x, 0.0), e.radiance).mul_channels([
-            ft[0] * s.x,
-            ft[1] * s.y,
-            ft[2] * s.z,
-        ]);
+    let s = lf.sigma_s;
+    let times_sigma_s = |t: [Taylor2<S>; 3]| [t[0] * s.x, t[1] * s.y, t[2] * s.z];
+    if e.kind == ElementKind::Surface {
+        // Where the phase integrates in closed form over the element (2D), it does:
+        // a lobe narrower than the element (g → ±1) is then exact.
+        if let Some(pw) = S::phase_weighted_form(lf.g, e.v, lf.x, lf.outgoing()) {
+            let t = match e.far_plane {
+                Some(plane) => slide::vertex_rule(lf, e, plane, soft, false),
+                None => transmittance_taylor_rgb::<S>(lf.sigma_t, lf.x, e.anchor, soft),
+            };
+            return TaylorRgb::tint(pw, e.radiance).mul_channels(times_sigma_s(t));
+        }
+        if let Some(plane) = e.far_plane {
+            // An occlusion boundary: f·T by the vertex rule with the near vertices
+            // sliding on the far surface (see `slide`).
+            let ft = slide::vertex_rule(lf, e, plane, soft, true);
+            return TaylorRgb::tint(S::form_factor_clamped(e.v, lf.x, 0.0), e.radiance).mul_channels(times_sigma_s(ft));
+        }
     }
     let phase = phase_taylor_out::<S>(lf.g, lf.x, e.anchor, lf.outgoing(), soft);
-    element_incident(lf, e, medium_clamp).mul_channels([
-        phase * lf.sigma_s.x,
-        phase * lf.sigma_s.y,
-        phase * lf.sigma_s.z,
-    ])
+    element_incident(lf, e, medium_clamp).mul_channels(times_sigma_s([phase; 3]))
 }
 
 /// Elements summed per parallel task: the partial sums are added in a fixed order,

@@ -11,7 +11,8 @@
 
 use super::directions;
 use crate::core::element::{segment_form_factor, segment_form_factor_clamped};
-use crate::core::phase::{Hg2, Hg3};
+use crate::core::phase::{Hg2, Hg3, Outgoing};
+use crate::core::phase_arc::phase_weighted_angle;
 use crate::core::rng::Sampler;
 use crate::core::space::{D2, D3, Space};
 use crate::core::taylor::Taylor2;
@@ -82,6 +83,15 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     /// (edge) terms, shared by every element of a sum so that terms cancel exactly
     /// where elements meet.
     fn form_factor_clamped(v: Self::Simplex<Self::Vec>, x: Self::Vec, r_min: f64) -> Taylor2<Self>;
+    /// ∫ f dω over the simplex's directions (an oriented simplex), with its
+    /// derivatives, where a closed form exists (2D: `core::phase_arc`); `None` in 3D,
+    /// where the phase is taken at the element's anchor.
+    fn phase_weighted_form(
+        g: f64,
+        v: Self::Simplex<Self::Vec>,
+        x: Self::Vec,
+        out: Outgoing<Self::Vec>,
+    ) -> Option<Taylor2<Self>>;
 }
 
 /// The componentwise operations of [`Dim`] for a glam vector type (the same names in
@@ -183,6 +193,10 @@ impl Dim for D2 {
     fn form_factor_clamped([a, b]: [DVec2; 2], x: DVec2, r_min: f64) -> Taylor2<D2> {
         segment_form_factor_clamped(a, b, x, r_min)
     }
+
+    fn phase_weighted_form(g: f64, [a, b]: [DVec2; 2], x: DVec2, out: Outgoing<DVec2>) -> Option<Taylor2<D2>> {
+        Some(phase_weighted_angle(g, a, b, x, out))
+    }
 }
 
 impl Dim for D3 {
@@ -255,5 +269,9 @@ impl Dim for D3 {
 
     fn form_factor_clamped(v: [DVec3; 3], x: DVec3, r_min: f64) -> Taylor2<D3> {
         triangle_form_factor_clamped(v, x, r_min)
+    }
+
+    fn phase_weighted_form(_: f64, _: [DVec3; 3], _: DVec3, _: Outgoing<DVec3>) -> Option<Taylor2<D3>> {
+        None
     }
 }

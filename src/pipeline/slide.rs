@@ -38,33 +38,43 @@ fn slid<S: Dim>(x: S::Vec, e: S::Vec, p: S::Vec, n: S::Vec) -> Option<S::Vec> {
     ok.then_some(y)
 }
 
-/// f(−ω·ω_o) T(|y − x|) per channel, for light from `y` received at `x`.
-fn phase_transmittance_at<S: Dim>(lf: &LightField<S>, x: S::Vec, y: S::Vec) -> [f64; 3] {
+/// f(−ω·ω_o) T(|y − x|) per channel, for light from `y` received at `x` (T alone
+/// without `phase`).
+fn phase_transmittance_at<S: Dim>(lf: &LightField<S>, x: S::Vec, y: S::Vec, phase: bool) -> [f64; 3] {
     let r = S::length(y - x);
+    let t: Rgb = (-lf.sigma_t * r).exp();
+    if !phase {
+        return t.to_array();
+    }
     let u = (y - x) / r;
     let w = match lf.outgoing() {
         Outgoing::Direction(w) => w / S::length(w),
         Outgoing::TowardsPoint(eye) => (eye - x) / S::length(eye - x),
     };
     let f = hg_of_mu::<S>(lf.g, -S::dot(u, w)).0;
-    let t: Rgb = (-lf.sigma_t * r).exp();
     [f * t.x, f * t.y, f * t.z]
 }
 
-/// The vertex rule's f·T over a bridging element whose far surface's tangent plane
-/// is (`p`, `n`), per channel, with derivatives in x.
-pub fn phase_transmittance<S: Dim>(
+/// The vertex rule's f·T (or T alone, without `phase`: where the phase is integrated
+/// over the element exactly) over a bridging element whose far surface's tangent
+/// plane is (`p`, `n`), per channel, with derivatives in x.
+pub fn vertex_rule<S: Dim>(
     lf: &LightField<S>,
     e: &Element<S>,
     (p, n): (S::Vec, S::Vec),
     soft: f64,
+    phase: bool,
 ) -> [Taylor2<S>; 3] {
     let x = lf.x;
     let v = e.v.as_ref();
     let dmax = v.iter().map(|&q| S::length(q - x)).fold(0.0, f64::max);
     let fixed = |a: S::Vec| {
+        let t = transmittance_taylor_rgb::<S>(lf.sigma_t, x, a, soft);
+        if !phase {
+            return t;
+        }
         let f = phase_taylor_out::<S>(lf.g, x, a, lf.outgoing(), soft);
-        transmittance_taylor_rgb::<S>(lf.sigma_t, x, a, soft).map(|t| t * f)
+        t.map(|t| t * f)
     };
     let mut sum = [Taylor2::zero(); 3];
     for &q in v {
@@ -80,8 +90,8 @@ pub fn phase_transmittance<S: Dim>(
                 let h = 1e-3 * scale;
                 Taylor2::central_differences(
                     |xp| match slid::<S>(xp, q, p, n) {
-                        Some(yp) => phase_transmittance_at(lf, xp, yp),
-                        None => phase_transmittance_at(lf, xp, y),
+                        Some(yp) => phase_transmittance_at(lf, xp, yp, phase),
+                        None => phase_transmittance_at(lf, xp, y, phase),
                     },
                     x,
                     h,
