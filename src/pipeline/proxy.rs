@@ -179,7 +179,24 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
             .as_ref()
             .iter()
             .fold((f64::INFINITY, 0.0f64), |(lo, hi), e| (lo.min(e.1), hi.max(e.1)));
-        let bridging = dmax - dmin > BRIDGE_RATIO * dmin;
+        // Ends at clearly different depths bridge an occluder's edge and what lies
+        // behind it, unless they are all hits in one plane: a continuous surface seen
+        // at a grazing angle (below an emitter, 1e-4 away, elements 10% apart in depth
+        // were "bridging", and their transmittance, evaluated at their ends, erred).
+        let one_plane = || {
+            let hits: Vec<_> = t
+                .as_ref()
+                .iter()
+                .filter_map(|&k| lf.rays[k as usize].hit.as_ref())
+                .collect();
+            hits.len() == S::DIM
+                && v.as_ref().iter().all(|q| {
+                    let n = hits[0].normal;
+                    S::dot(n, q.0 - v.as_ref()[0].0).abs() <= 1e-9 * dmax
+                        && hits.iter().all(|h| S::dot(h.normal, n) > 1.0 - 1e-12)
+                })
+        };
+        let bridging = dmax - dmin > BRIDGE_RATIO * dmin && !one_plane();
         // A piece of one continuous surface carries its vertices' mean, phase and
         // transmittance at their centroid (second order along a chain; the farther
         // vertex's values are first order, and where vertices are near x their

@@ -108,3 +108,41 @@ pub fn vertex_rule<S: Dim>(
     }
     sum.map(|s| s * (1.0 / v.len() as f64))
 }
+
+/// The mean transmittance over a segment element's directions, ∫ T dθ / Θ, by
+/// 4-point Gauss–Legendre in the direction between its two (fixed) vertices, with
+/// derivatives in x (central differences of this closed form). The transmittance at
+/// one anchor is a midpoint rule, and where T changes across an element by much (a
+/// long element seen at a grazing angle, next to a surface) its error, differentiated,
+/// grew as 1/d: σ_t = 1 at d = 1e-4 below an emitter, gradient 34% off. Used where
+/// σ_t |r_b − r_a| exceeds [`VARYING_T`]; segments only (flatland).
+pub fn transmittance_mean<S: Dim>(lf: &LightField<S>, a: S::Vec, b: S::Vec) -> [Taylor2<S>; 3] {
+    const GL4: [(f64, f64); 4] = [
+        (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
+        (0.330_009_478_207_571_87, 0.326_072_577_431_273_07),
+        (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
+        (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
+    ];
+    let mean = |x: S::Vec| {
+        let (ra, rb) = (S::length(a - x), S::length(b - x));
+        let (ua, ub) = ((a - x) / ra, (b - x) / rb);
+        let (mut sum, mut norm) = (Rgb::ZERO, 0.0);
+        for (t, w) in GL4 {
+            // The point of the segment seen along the direction (1 − t) u_a + t u_b,
+            // and dθ/dt ∝ 1/|(1 − t) u_a + t u_b|².
+            let s = (t / rb) / ((1.0 - t) / ra + t / rb);
+            let y = a + (b - a) * s;
+            let j = w / S::length_squared(ua * (1.0 - t) + ub * t);
+            sum += (-lf.sigma_t * S::length(y - x)).exp() * j;
+            norm += j;
+        }
+        (sum / norm).to_array()
+    };
+    let x = lf.x;
+    let r = S::length(a - x).min(S::length(b - x));
+    let h = 1e-3 * r.min(1.0 / lf.sigma_t.max_element().max(1e-12));
+    Taylor2::central_differences(mean, x, h)
+}
+
+/// σ_t |r_b − r_a| above which [`transmittance_mean`] replaces the anchor's value.
+pub const VARYING_T: f64 = 0.02;
