@@ -4,7 +4,8 @@
 //! benchmark sphere (a UV sphere of 158,802 triangles made in code, origins uniform
 //! in [−2, 2]³, directions uniform: the set-up `scripts/embree_mitsuba_compare.py` gives
 //! Embree) and for each shipped scene (origins uniform in the scene's bounds), plus
-//! the time to build the acceleration structure (one thread, best of a few).
+//! the time to build the acceleration structure (one thread and all threads, best
+//! of a few).
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -44,6 +45,7 @@ struct Figures {
     scene: String,
     triangles: usize,
     build_seconds: f64,
+    build_seconds_all_threads: Option<f64>,
     rays: u64,
     closest_hit_rays_per_second_one_thread: f64,
     occluded_rays_per_second_one_thread: f64,
@@ -82,11 +84,11 @@ fn rate(rays: &[(DVec3, DVec3)], query: impl Fn(DVec3, DVec3) -> bool + Sync) ->
     (rays.len() as f64 / start.elapsed().as_secs_f64().max(1e-9), hits)
 }
 
-/// Build time (best of three, one thread) and the geometry.
+/// Build time (best of five, on the current rayon pool) and the geometry.
 fn build(tris: &[Triangle]) -> (f64, Geometry<D3, Triangle>) {
     let mut best = f64::INFINITY;
     let mut geometry = None;
-    for _ in 0..3 {
+    for _ in 0..5 {
         let t = tris.to_vec();
         let start = Instant::now();
         let g = Geometry::new(t);
@@ -102,6 +104,7 @@ fn measure(name: String, tris: &[Triangle], lo: DVec3, hi: DVec3, n_rays: u64, a
         .build()
         .expect("a one-thread pool");
     let (build_seconds, g) = one.install(|| build(tris));
+    let build_all = all_threads.then(|| build(tris).0);
     let t_min = 1e-9 * (hi - lo).length();
     let closest = |o, d| g.closest_hit(o, d, t_min, f64::INFINITY, None).is_some();
     let occluded = |o, d| g.occluded(o, d, t_min, f64::INFINITY, None);
@@ -118,6 +121,7 @@ fn measure(name: String, tris: &[Triangle], lo: DVec3, hi: DVec3, n_rays: u64, a
         scene: name,
         triangles: tris.len(),
         build_seconds,
+        build_seconds_all_threads: build_all,
         rays: n_rays,
         closest_hit_rays_per_second_one_thread: c1,
         occluded_rays_per_second_one_thread: o1,
@@ -126,11 +130,13 @@ fn measure(name: String, tris: &[Triangle], lo: DVec3, hi: DVec3, n_rays: u64, a
         hit_fraction: hits as f64 / n_rays as f64,
     };
     let all = |v: Option<f64>| v.map_or(String::new(), |v| format!(", {:.2} M/s all threads", v / 1e6));
+    let build_all = build_all.map_or(String::new(), |b| format!(", {b:.4} s all threads"));
     println!(
-        "{} ({} triangles, build {:.4} s): closest hit {:.2} M rays/s 1 thread{}; occluded {:.2} M rays/s 1 thread{}; {:.0}% hit",
+        "{} ({} triangles, build {:.4} s 1 thread{}): closest hit {:.2} M rays/s 1 thread{}; occluded {:.2} M rays/s 1 thread{}; {:.0}% hit",
         f.scene,
         f.triangles,
         f.build_seconds,
+        build_all,
         c1 / 1e6,
         all(call),
         o1 / 1e6,
