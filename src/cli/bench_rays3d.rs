@@ -46,6 +46,8 @@ struct Figures {
     triangles: usize,
     build_seconds: f64,
     build_seconds_all_threads: Option<f64>,
+    /// `Geometry::layout_hash` (the tree, bit for bit): compare builds across versions.
+    layout_hash: String,
     rays: u64,
     closest_hit_rays_per_second_one_thread: f64,
     occluded_rays_per_second_one_thread: f64,
@@ -122,6 +124,7 @@ fn measure(name: String, tris: &[Triangle], lo: DVec3, hi: DVec3, n_rays: u64, a
         triangles: tris.len(),
         build_seconds,
         build_seconds_all_threads: build_all,
+        layout_hash: format!("{:016x}", g.layout_hash()),
         rays: n_rays,
         closest_hit_rays_per_second_one_thread: c1,
         occluded_rays_per_second_one_thread: o1,
@@ -132,11 +135,12 @@ fn measure(name: String, tris: &[Triangle], lo: DVec3, hi: DVec3, n_rays: u64, a
     let all = |v: Option<f64>| v.map_or(String::new(), |v| format!(", {:.2} M/s all threads", v / 1e6));
     let build_all = build_all.map_or(String::new(), |b| format!(", {b:.4} s all threads"));
     println!(
-        "{} ({} triangles, build {:.4} s 1 thread{}): closest hit {:.2} M rays/s 1 thread{}; occluded {:.2} M rays/s 1 thread{}; {:.0}% hit",
+        "{} ({} triangles, build {:.4} s 1 thread{}, layout {}): closest hit {:.2} M rays/s 1 thread{}; occluded {:.2} M rays/s 1 thread{}; {:.0}% hit",
         f.scene,
         f.triangles,
         f.build_seconds,
         build_all,
+        f.layout_hash,
         c1 / 1e6,
         all(call),
         o1 / 1e6,

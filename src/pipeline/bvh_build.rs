@@ -328,11 +328,19 @@ fn split<S: Dim>(refs: &mut [Ref], bounds: Box4) -> Option<(usize, Box4, Box4)> 
         let mut right = [(Box4::EMPTY, 0u32); BINS];
         let mut acc = (Box4::EMPTY, 0u32);
         for k in (1..BINS).rev() {
-            acc = (acc.0.union(&axis_bins[k].0), acc.1 + axis_bins[k].1);
+            if axis_bins[k].1 > 0 {
+                acc = (acc.0.union(&axis_bins[k].0), acc.1 + axis_bins[k].1);
+            }
             right[k] = acc;
         }
+        // An empty bin k leaves both sides of candidate k − 1 as they are: the
+        // same cost, and the earlier candidate wins ties. Small nodes (most of
+        // them) have mostly empty bins.
         let mut left = (Box4::EMPTY, 0u32);
         for k in 0..BINS - 1 {
+            if axis_bins[k].1 == 0 {
+                continue;
+            }
             left = (left.0.union(&axis_bins[k].0), left.1 + axis_bins[k].1);
             let r = right[k + 1];
             if left.1 > 0 && r.1 > 0 {
