@@ -131,10 +131,10 @@ const CHUNK: usize = 1 << 13;
 const TASK: usize = 1 << 12;
 
 /// The binary tree of primitives `0..n`, `bounds(i)` the box of primitive i.
-/// The same boxes give the same tree, bit for bit, whatever the thread count: the
-/// only parallel reductions are min, max and integer sums merged in a fixed order
-/// (chunk order, then left before right), and a box's min keeps the earlier of two
-/// equal values as a sequential scan does (so 0.0 and −0.0 cannot swap either).
+/// The same boxes give the same tree, bit for bit, whatever the thread count: how
+/// the work splits into chunks and tasks depends on sizes only, and what crosses
+/// them (box min and max, integer sums) is merged in a fixed order (chunk order,
+/// then left before right), so even 0.0 and −0.0 cannot trade places.
 pub fn build<S: Dim>(n: usize, bounds: impl Fn(usize) -> Aabb<S> + Sync) -> BinaryTree {
     // The build partitions these in place: each carries its box and index, so every
     // pass reads memory in order (an index array into the boxes read it at random
@@ -160,9 +160,9 @@ pub fn build<S: Dim>(n: usize, bounds: impl Fn(usize) -> Aabb<S> + Sync) -> Bina
     BinaryTree { nodes, order }
 }
 
-/// `f` over `refs`, on rayon in chunks of [`CHUNK`] merged in chunk order by
-/// `merge` when there are at least two chunks: the same answer as `f(refs)` for
-/// the min, max and sums merged here.
+/// `f` over `refs`; from two chunks on, `f` of each chunk of [`CHUNK`] on rayon,
+/// merged in chunk order by `merge` (the same values as `f(refs)` for the min,
+/// max and sums merged here).
 fn chunked<T: Send>(refs: &[Ref], f: impl Fn(&[Ref]) -> T + Sync, merge: impl Fn(T, T) -> T) -> T {
     if refs.len() < 2 * CHUNK {
         return f(refs);
@@ -188,6 +188,13 @@ impl Ref {
 
 /// Bins of one axis: bounds and count per bin.
 type Bins = [(Box4, u32); BINS];
+
+fn merge_bins(mut a: [Bins; 3], b: [Bins; 3]) -> [Bins; 3] {
+    for (x, y) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+        *x = (x.0.union(&y.0), x.1 + y.1);
+    }
+    a
+}
 
 /// A subtree as built: nodes of a sequential build (indices local to it), or a
 /// node whose two children were built as parallel tasks.
@@ -298,26 +305,34 @@ fn split<S: Dim>(refs: &mut [Ref], bounds: Box4) -> Option<(usize, Box4, Box4)> 
         }
     });
     let bin = |a: usize, c: &[f32; 4]| (((c[a] - cb.lo[a]) * scale[a]) as usize).min(BINS - 1);
+    let bin_into = |bins: &mut [Bins; 3], r: &Ref| {
+        let centre = r.centre2();
+        for (a, axis_bins) in bins.iter_mut().enumerate().take(S::DIM) {
+            let k = bin(a, &centre);
+            axis_bins[k].0 = axis_bins[k].0.union(&r.b);
+            axis_bins[k].1 += 1;
+        }
+    };
     let bins = chunked(
         refs,
         |c| {
             let mut bins: [Bins; 3] = [[(Box4::EMPTY, 0); BINS]; 3];
-            for r in c {
-                let centre = r.centre2();
-                for (a, axis_bins) in bins.iter_mut().enumerate().take(S::DIM) {
-                    let k = bin(a, &centre);
-                    axis_bins[k].0 = axis_bins[k].0.union(&r.b);
-                    axis_bins[k].1 += 1;
+            if c.len() < 64 {
+                c.iter().for_each(|r| bin_into(&mut bins, r));
+                return bins;
+            }
+            // Neighbouring primitives tend to fall in the same bins: two sets of
+            // bins (even and odd primitives) halve the chains of dependent updates.
+            let mut odd = bins;
+            for pair in c.chunks(2) {
+                bin_into(&mut bins, &pair[0]);
+                if let Some(r) = pair.get(1) {
+                    bin_into(&mut odd, r);
                 }
             }
-            bins
+            merge_bins(bins, odd)
         },
-        |mut a, c| {
-            for (x, y) in a.iter_mut().flatten().zip(c.iter().flatten()) {
-                *x = (x.0.union(&y.0), x.1 + y.1);
-            }
-            a
-        },
+        merge_bins,
     );
     // Best split over the axes: (cost, axis, last bin on the left, left and right bounds).
     let mut best: Option<(f64, usize, usize, Box4, Box4)> = None;
