@@ -17,6 +17,10 @@ use super::taylor::Taylor2;
 #[inline]
 pub fn transmittance(sigma_t: Rgb, d: f64) -> Rgb {
     let tau = sigma_t * d.max(0.0);
+    // Grey media (the common case) need one exponential, the same bits as three.
+    if tau.x == tau.y && tau.y == tau.z {
+        return Rgb::splat((-tau.x).exp());
+    }
     Rgb::new((-tau.x).exp(), (-tau.y).exp(), (-tau.z).exp())
 }
 

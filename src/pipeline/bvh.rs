@@ -14,6 +14,8 @@ use super::bvh_build;
 pub use super::bvh_build::Aabb;
 use super::bvh_wide::WideBvh;
 use super::dim::Dim;
+use rayon::prelude::*;
+use std::hash::Hasher;
 
 /// Something a ray can hit.
 pub trait Primitive<S: Dim>: Send + Sync {
@@ -73,15 +75,16 @@ impl<S: Dim, P: Primitive<S>> Geometry<S, P> {
     pub fn with_accel(prims: Vec<P>, accel: Accel) -> Self {
         let (leaf_prims, bvh) = match accel {
             Accel::Bvh => {
-                let boxes: Vec<Aabb<S>> = prims
-                    .iter()
-                    .map(|p| {
-                        let (min, max) = p.bounds();
-                        Aabb { min, max }
-                    })
+                let tree = bvh_build::build::<S>(prims.len(), |i| {
+                    let (min, max) = prims[i].bounds();
+                    Aabb { min, max }
+                });
+                let leaf_prims = tree
+                    .order
+                    .par_iter()
+                    .with_min_len(4096)
+                    .map(|&i| (prims[i as usize].leaf(), i))
                     .collect();
-                let tree = bvh_build::build(&boxes);
-                let leaf_prims = tree.order.iter().map(|&i| (prims[i as usize].leaf(), i)).collect();
                 (leaf_prims, WideBvh::collapse::<S>(&tree))
             }
             Accel::Linear => (Vec::new(), WideBvh::default()),
@@ -93,6 +96,16 @@ impl<S: Dim, P: Primitive<S>> Geometry<S, P> {
             accel,
             dim: std::marker::PhantomData,
         }
+    }
+
+    /// A hash of the acceleration structure's layout (every node's boxes, children
+    /// and counts bit for bit, and the primitives' leaf order): equal whatever the
+    /// thread count that built it.
+    pub fn layout_hash(&self) -> u64 {
+        let mut h = std::hash::DefaultHasher::new();
+        self.bvh.hash_into(&mut h);
+        self.leaf_prims.iter().for_each(|(_, i)| h.write_u32(*i));
+        h.finish()
     }
 
     pub fn accel(&self) -> Accel {

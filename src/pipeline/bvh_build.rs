@@ -1,9 +1,12 @@
 //! The BVH's build: a binary tree over primitive boxes by the binned surface-area
 //! heuristic (16 bins per axis, every axis binned in one pass over the primitives;
 //! in 2D the "area" is the half perimeter), which `bvh_wide` then collapses into
-//! 4-wide nodes. Deterministic: the same boxes give the same tree.
+//! 4-wide nodes. Parallel over rayon (large nodes bin in chunks, large subtrees are
+//! tasks) and deterministic: the same boxes give the same tree whatever the thread
+//! count.
 
 use super::dim::Dim;
+use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug)]
 pub struct Aabb<S: Dim> {
@@ -121,29 +124,51 @@ pub struct BinaryTree {
 pub const MAX_LEAF: usize = 4;
 const FORCE_SPLIT: usize = 4 * MAX_LEAF;
 const BINS: usize = 16;
+/// Nodes of at least `2·CHUNK` primitives bin (and find their centre bounds) in
+/// chunks of `CHUNK` on rayon, merged in chunk order.
+const CHUNK: usize = 1 << 13;
+/// Subtrees of at least this many primitives are built as rayon tasks.
+const TASK: usize = 1 << 12;
 
-pub fn build<S: Dim>(boxes: &[Aabb<S>]) -> BinaryTree {
-    let mut tree = BinaryTree {
-        nodes: Vec::with_capacity(2 * boxes.len() / MAX_LEAF + 1),
-        order: Vec::new(),
-    };
+/// The binary tree of primitives `0..n`, `bounds(i)` the box of primitive i.
+/// The same boxes give the same tree, bit for bit, whatever the thread count: how
+/// the work splits into chunks and tasks depends on sizes only, and what crosses
+/// them (box min and max, integer sums) is merged in a fixed order (chunk order,
+/// then left before right), so even 0.0 and −0.0 cannot trade places.
+pub fn build<S: Dim>(n: usize, bounds: impl Fn(usize) -> Aabb<S> + Sync) -> BinaryTree {
     // The build partitions these in place: each carries its box and index, so every
     // pass reads memory in order (an index array into the boxes read it at random
     // and took a third longer on the benchmark sphere).
-    let mut refs: Vec<Ref> = boxes
-        .iter()
-        .enumerate()
-        .map(|(i, b)| Ref {
-            b: Box4::outward(b),
+    let mut refs: Vec<Ref> = (0..n)
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|i| Ref {
+            b: Box4::outward(&bounds(i)),
             index: i as u32,
         })
         .collect();
+    let mut nodes = Vec::with_capacity(2 * n / MAX_LEAF + 1);
     if !refs.is_empty() {
-        let bounds = refs.iter().fold(Box4::EMPTY, |a, r| a.union(&r.b));
-        split_range::<S>(&mut tree, &mut refs, 0, bounds);
+        let root = chunked(
+            &refs,
+            |c| c.iter().fold(Box4::EMPTY, |a, r| a.union(&r.b)),
+            |a, c| a.union(&c),
+        );
+        subtree::<S>(&mut refs, 0, root).flatten(&mut nodes);
     }
-    tree.order = refs.iter().map(|r| r.index).collect();
-    tree
+    let order = refs.par_iter().with_min_len(CHUNK).map(|r| r.index).collect();
+    BinaryTree { nodes, order }
+}
+
+/// `f` over `refs`; from two chunks on, `f` of each chunk of [`CHUNK`] on rayon,
+/// merged in chunk order by `merge` (the same values as `f(refs)` for the min,
+/// max and sums merged here).
+fn chunked<T: Send>(refs: &[Ref], f: impl Fn(&[Ref]) -> T + Sync, merge: impl Fn(T, T) -> T) -> T {
+    if refs.len() < 2 * CHUNK {
+        return f(refs);
+    }
+    let parts: Vec<T> = refs.par_chunks(CHUNK).map(&f).collect();
+    parts.into_iter().reduce(merge).expect("at least two chunks")
 }
 
 /// A primitive during the build: its outward f32 box and its index.
@@ -164,21 +189,111 @@ impl Ref {
 /// Bins of one axis: bounds and count per bin.
 type Bins = [(Box4, u32); BINS];
 
-/// Build the subtree of `refs` (whose boxes' union is `bounds`, and which start at
-/// `offset` in leaf order); returns its node index.
-fn split_range<S: Dim>(tree: &mut BinaryTree, refs: &mut [Ref], offset: usize, bounds: Box4) -> u32 {
-    let node = tree.nodes.len() as u32;
-    let n = refs.len();
+fn merge_bins(mut a: [Bins; 3], b: [Bins; 3]) -> [Bins; 3] {
+    for (x, y) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+        *x = (x.0.union(&y.0), x.1 + y.1);
+    }
+    a
+}
+
+/// A subtree as built: nodes of a sequential build (indices local to it), or a
+/// node whose two children were built as parallel tasks.
+enum Built {
+    Nodes(Vec<(Box4, BinNode)>),
+    Join(Box4, Box<Built>, Box<Built>),
+}
+
+impl Built {
+    /// Append the subtree's nodes in preorder (node, left subtree, right subtree:
+    /// the order of a sequential build) with global indices.
+    fn flatten(self, out: &mut Vec<(Box4, BinNode)>) {
+        match self {
+            Built::Nodes(nodes) => {
+                let base = out.len() as u32;
+                out.extend(nodes.into_iter().map(|(b, node)| match node {
+                    BinNode::Inner { left, right } => (
+                        b,
+                        BinNode::Inner {
+                            left: left + base,
+                            right: right + base,
+                        },
+                    ),
+                    leaf => (b, leaf),
+                }));
+            }
+            Built::Join(b, left, right) => {
+                let node = out.len();
+                out.push((b, BinNode::Leaf { start: 0, count: 0 }));
+                let l = out.len() as u32;
+                left.flatten(out);
+                let r = out.len() as u32;
+                right.flatten(out);
+                out[node].1 = BinNode::Inner { left: l, right: r };
+            }
+        }
+    }
+}
+
+/// The subtree of `refs` (whose boxes' union is `bounds`, and which start at
+/// `offset` in leaf order): large ones split here and build their children with
+/// `rayon::join`, the rest sequentially.
+fn subtree<S: Dim>(refs: &mut [Ref], offset: usize, bounds: Box4) -> Built {
+    if refs.len() < TASK {
+        let mut nodes = Vec::with_capacity(2 * refs.len() / MAX_LEAF + 1);
+        split_range::<S>(&mut nodes, refs, offset, bounds);
+        return Built::Nodes(nodes);
+    }
+    let Some((mid, left_bounds, right_bounds)) = split::<S>(refs, bounds) else {
+        let leaf = BinNode::Leaf {
+            start: offset as u32,
+            count: refs.len() as u32,
+        };
+        return Built::Nodes(vec![(bounds, leaf)]);
+    };
+    let (lo, hi) = refs.split_at_mut(mid);
+    let (left, right) = rayon::join(
+        || subtree::<S>(lo, offset, left_bounds),
+        || subtree::<S>(hi, offset + mid, right_bounds),
+    );
+    Built::Join(bounds, Box::new(left), Box::new(right))
+}
+
+/// Build the subtree of `refs` sequentially into `nodes` (as [`subtree`]);
+/// returns its node index.
+fn split_range<S: Dim>(nodes: &mut Vec<(Box4, BinNode)>, refs: &mut [Ref], offset: usize, bounds: Box4) -> u32 {
+    let node = nodes.len() as u32;
     let leaf = BinNode::Leaf {
         start: offset as u32,
-        count: n as u32,
+        count: refs.len() as u32,
     };
-    tree.nodes.push((bounds, leaf));
-    if n <= MAX_LEAF {
+    nodes.push((bounds, leaf));
+    let Some((mid, left_bounds, right_bounds)) = split::<S>(refs, bounds) else {
         return node;
+    };
+    let (lo, hi) = refs.split_at_mut(mid);
+    let left = split_range::<S>(nodes, lo, offset, left_bounds);
+    let right = split_range::<S>(nodes, hi, offset + mid, right_bounds);
+    nodes[node as usize].1 = BinNode::Inner { left, right };
+    node
+}
+
+/// The binned SAH split of `refs` (boxes' union `bounds`): partitions them in
+/// place and returns (primitives on the left, left bounds, right bounds), or None
+/// when a leaf is cheaper or no split exists (all centres coincide).
+fn split<S: Dim>(refs: &mut [Ref], bounds: Box4) -> Option<(usize, Box4, Box4)> {
+    let n = refs.len();
+    if n <= MAX_LEAF {
+        return None;
     }
-    let mut cb = Box4::EMPTY;
-    refs.iter().for_each(|r| cb.grow(&r.centre2()));
+    let cb = chunked(
+        refs,
+        |c| {
+            let mut cb = Box4::EMPTY;
+            c.iter().for_each(|r| cb.grow(&r.centre2()));
+            cb
+        },
+        |a, c| a.union(&c),
+    );
     // Bin index per axis: k = (c − lo)·scale, the scale precomputed (no division
     // per primitive); a flat axis gets scale 0 (everything in bin 0, never split).
     let scale: [f32; 4] = std::array::from_fn(|a| {
@@ -190,15 +305,35 @@ fn split_range<S: Dim>(tree: &mut BinaryTree, refs: &mut [Ref], offset: usize, b
         }
     });
     let bin = |a: usize, c: &[f32; 4]| (((c[a] - cb.lo[a]) * scale[a]) as usize).min(BINS - 1);
-    let mut bins: [Bins; 3] = [[(Box4::EMPTY, 0); BINS]; 3];
-    for r in refs.iter() {
-        let c = r.centre2();
+    let bin_into = |bins: &mut [Bins; 3], r: &Ref| {
+        let centre = r.centre2();
         for (a, axis_bins) in bins.iter_mut().enumerate().take(S::DIM) {
-            let k = bin(a, &c);
+            let k = bin(a, &centre);
             axis_bins[k].0 = axis_bins[k].0.union(&r.b);
             axis_bins[k].1 += 1;
         }
-    }
+    };
+    let bins = chunked(
+        refs,
+        |c| {
+            let mut bins: [Bins; 3] = [[(Box4::EMPTY, 0); BINS]; 3];
+            if c.len() < 64 {
+                c.iter().for_each(|r| bin_into(&mut bins, r));
+                return bins;
+            }
+            // Neighbouring primitives tend to fall in the same bins: two sets of
+            // bins (even and odd primitives) halve the chains of dependent updates.
+            let mut odd = bins;
+            for pair in c.chunks(2) {
+                bin_into(&mut bins, &pair[0]);
+                if let Some(r) = pair.get(1) {
+                    bin_into(&mut odd, r);
+                }
+            }
+            merge_bins(bins, odd)
+        },
+        merge_bins,
+    );
     // Best split over the axes: (cost, axis, last bin on the left, left and right bounds).
     let mut best: Option<(f64, usize, usize, Box4, Box4)> = None;
     for (a, axis_bins) in bins.iter().enumerate().take(S::DIM) {
@@ -208,11 +343,19 @@ fn split_range<S: Dim>(tree: &mut BinaryTree, refs: &mut [Ref], offset: usize, b
         let mut right = [(Box4::EMPTY, 0u32); BINS];
         let mut acc = (Box4::EMPTY, 0u32);
         for k in (1..BINS).rev() {
-            acc = (acc.0.union(&axis_bins[k].0), acc.1 + axis_bins[k].1);
+            if axis_bins[k].1 > 0 {
+                acc = (acc.0.union(&axis_bins[k].0), acc.1 + axis_bins[k].1);
+            }
             right[k] = acc;
         }
+        // An empty bin k leaves both sides of candidate k − 1 as they are: the
+        // same cost, and the earlier candidate wins ties. Small nodes (most of
+        // them) have mostly empty bins.
         let mut left = (Box4::EMPTY, 0u32);
         for k in 0..BINS - 1 {
+            if axis_bins[k].1 == 0 {
+                continue;
+            }
             left = (left.0.union(&axis_bins[k].0), left.1 + axis_bins[k].1);
             let r = right[k + 1];
             if left.1 > 0 && r.1 > 0 {
@@ -223,11 +366,9 @@ fn split_range<S: Dim>(tree: &mut BinaryTree, refs: &mut [Ref], offset: usize, b
             }
         }
     }
-    let Some((cost, axis, k, left_bounds, right_bounds)) = best else {
-        return node; // all centres coincide: no split possible
-    };
+    let (cost, axis, k, left_bounds, right_bounds) = best?;
     if cost >= bounds.half_boundary::<S>() * n as f64 && n <= FORCE_SPLIT {
-        return node; // a leaf is cheaper
+        return None; // a leaf is cheaper
     }
     let mut mid = 0;
     for j in 0..n {
@@ -236,9 +377,5 @@ fn split_range<S: Dim>(tree: &mut BinaryTree, refs: &mut [Ref], offset: usize, b
             mid += 1;
         }
     }
-    let (lo, hi) = refs.split_at_mut(mid);
-    let left = split_range::<S>(tree, lo, offset, left_bounds);
-    let right = split_range::<S>(tree, hi, offset + mid, right_bounds);
-    tree.nodes[node as usize].1 = BinNode::Inner { left, right };
-    node
+    Some((mid, left_bounds, right_bounds))
 }

@@ -110,6 +110,18 @@ impl WideBvh {
         bvh
     }
 
+    /// Feed every node, bit for bit, to `h` (for [`super::bvh::Geometry::layout_hash`]).
+    pub fn hash_into(&self, h: &mut impl std::hash::Hasher) {
+        for n in &self.nodes {
+            n.bounds
+                .as_flattened()
+                .as_flattened()
+                .iter()
+                .for_each(|b| h.write_u32(b.to_bits()));
+            n.child.iter().chain(&n.count).for_each(|&c| h.write_u32(c));
+        }
+    }
+
     /// A wide node of binary nodes `children` (inner ones not yet linked).
     fn node(tree: &BinaryTree, children: &[u32]) -> Node {
         let mut n = Node {
