@@ -35,6 +35,12 @@ pub fn read(path: &std::path::Path) -> Result<String, SceneError> {
     })
 }
 
+/// Whether scene JSON is a 3D scene: it parses and has a `camera` block (a 2D
+/// scene has none). Anything else is read as 2D, whose loader names the problem.
+pub fn is_3d_json(text: &str) -> bool {
+    serde_json::from_str::<serde_json::Value>(text).is_ok_and(|v| v.get("camera").is_some())
+}
+
 /// Parse scene JSON (unknown fields rejected by the description's serde attributes)
 /// and validate it with `validate`; errors name `file` and the JSON path.
 pub fn parse<T: serde::de::DeserializeOwned>(

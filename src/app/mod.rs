@@ -1,5 +1,6 @@
 //! The interactive workbench (`volcache app`, or `volcache` alone): an egui/eframe
-//! window over the flatland model. UI only: every number comes from the library
+//! window over the flatland model and, as its second mode, the 3D renderer
+//! ([`mode`]: the switch; opening a 3D scene file switches to 3D). UI only: every number comes from the library
 //! functions the command line calls, on background threads ([`jobs`]), and the
 //! state logic (scene edits, undo, scheduling) lives apart from the widgets.
 //!
@@ -15,6 +16,11 @@
 //!   inspector; [`panels`], [`scene_panel`], [`toolbar`]: side panel, status bar,
 //!   toolbar and shortcuts; [`layout`]: how the panels give way to the canvas;
 //!   [`command`]: "copy as command".
+//! - 3D mode: [`workbench3d`] (state, scheduling), [`document3d`] (the scene,
+//!   its camera, undo, save), [`render3d_job`] (the view's progressive render by
+//!   path tracing, ours or Jarosz 2008), [`orbit`] (camera motion), [`view3d`]
+//!   (the image, mouse, record overlay), [`panel3d`] (side panel, status bar),
+//!   [`probe3d`] and [`inspector3d`] (the probe on a pixel's camera ray).
 
 pub mod canvas;
 pub mod command;
@@ -23,24 +29,35 @@ pub mod compare_textures;
 pub mod compare_view;
 pub mod compute;
 pub mod document;
+pub mod document3d;
 pub mod edit;
 pub mod frame_stats;
 pub mod inspector;
+pub mod inspector3d;
 pub mod jobs;
 pub mod layout;
+pub mod mode;
 pub mod open_dialog;
 pub mod open_window;
+pub mod orbit;
 pub mod overlay;
+pub mod panel3d;
 pub mod panels;
+pub mod probe3d;
 pub mod readout;
+pub mod render3d_job;
 pub mod scene_draw;
 pub mod scene_panel;
 pub mod toolbar;
 pub mod view;
+pub mod view3d;
 pub mod workbench;
+pub mod workbench3d;
 
 pub use document::Document;
+pub use mode::{App, Mode};
 pub use workbench::Workbench;
+pub use workbench3d::Workbench3d;
 
 use eframe::egui;
 use std::path::Path;
@@ -120,13 +137,28 @@ pub struct StartOptions {
     /// Write this file once everything asked for has been computed (scripts wait
     /// on it, e.g. scripts/screenshot.sh).
     pub ready_file: Option<std::path::PathBuf>,
+    /// 3D: the view's method, width (pixels) and a probe at image point U,V.
+    pub method3d: Option<render3d_job::Method3d>,
+    pub view_width: Option<usize>,
+    pub pixel: Option<glam::DVec2>,
 }
 
 /// Open the workbench on `scene` (the embedded default when None). Without a
 /// display, explain the headless commands and return a non-zero code.
 pub fn run(scene: Option<&Path>, start: StartOptions) -> anyhow::Result<ExitCode> {
     // A bad scene file is an error whether or not there is a display.
-    let doc = Document::open(scene)?;
+    let is_3d = match scene {
+        Some(p) => crate::scene_check::is_3d_json(&crate::scene_check::read(p)?),
+        None => false,
+    };
+    let app = match scene {
+        Some(p) if is_3d => {
+            let mut app = App::volume(document3d::Document3d::open(p)?);
+            app.volume_mut().start(&start);
+            app
+        }
+        _ => App::flat(Workbench::new(Document::open(scene)?).with_start(start)),
+    };
     if !has_display() {
         return Ok(no_window("neither DISPLAY nor WAYLAND_DISPLAY is set"));
     }
@@ -159,7 +191,7 @@ pub fn run(scene: Option<&Path>, start: StartOptions) -> anyhow::Result<ExitCode
             Box::new(move |cc| {
                 s.store(true, Ordering::Relaxed);
                 install_fonts(&cc.egui_ctx);
-                Ok(Box::new(Workbench::new(doc).with_start(start)))
+                Ok(Box::new(app))
             }),
         )
     }));

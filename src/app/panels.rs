@@ -35,6 +35,12 @@ impl Workbench {
 
     /// Load a scene file; on error keep the scene and show why.
     pub fn load_scene(&mut self, path: &Path) {
+        // A 3D scene opens in the window's 3D mode (see `super::mode`).
+        if std::fs::read_to_string(path).is_ok_and(|t| crate::scene_check::is_3d_json(&t)) {
+            self.open_3d = Some(path.to_path_buf());
+            self.open_dialog.open = false;
+            return;
+        }
         match self.doc.load_file(path) {
             Ok(()) => {
                 self.scene_path = path.display().to_string();

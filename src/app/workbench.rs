@@ -99,6 +99,8 @@ pub struct Workbench {
     pub show_inspector: bool,
     /// "Open…": shipped scenes and a file browser.
     pub open_dialog: super::open_dialog::OpenDialog,
+    /// A 3D scene file chosen here, for the window to open in 3D mode.
+    pub open_3d: Option<std::path::PathBuf>,
     pub view: ViewState,
     /// Compute the reference at the probe (on demand), and keep doing so as it moves.
     pub want_reference: bool,
@@ -163,6 +165,7 @@ impl Workbench {
             show_controls: true,
             show_inspector: true,
             open_dialog: Default::default(),
+            open_3d: None,
             view: ViewState::default(),
             want_reference: false,
             auto_reference: false,

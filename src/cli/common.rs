@@ -95,8 +95,7 @@ pub fn load_any_scene(path: Option<&Path>) -> anyhow::Result<AnyScene> {
         return Ok(AnyScene::Flat(Box::new(Scene::default_scene())));
     };
     let text = volcache::scene_check::read(p)?;
-    let is_3d = serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| v.get("camera").is_some());
-    Ok(match is_3d {
+    Ok(match volcache::scene_check::is_3d_json(&text) {
         true => AnyScene::Volume(Box::new(volcache::volume::scene::Scene::load(p)?)),
         false => AnyScene::Flat(Box::new(Scene::load(p)?)),
     })

@@ -1,0 +1,239 @@
+//! What the 3D view computes, on a background job: the image by one of the
+//! methods `render3d` offers, coarse to fine, each level exactly what
+//! `volcache render3d` writes for the same resolution, samples and seed (the
+//! view's "copy as command" reproduces the latest level).
+//!
+//! Path tracing goes through levels of growing resolution and then of growing
+//! samples per pixel at the view's resolution (each level a fresh render: a
+//! level's image is then the CLI's image, at the price of redoing the previous
+//! level's samples, at most doubling the total). The caches place their records
+//! for a half-resolution preview, then for the view's resolution, reusing light
+//! fields already captured (the placement's memo).
+
+use super::jobs::{Job, Notify, Priority, Reporter};
+use crate::core::metric::CacheMethod;
+use crate::core::space::D3;
+use crate::pipeline::record::CacheSettings;
+use crate::volume::cached::{CachedRenderParams, RecordInfo, RecordMemo, default_eps, render_cached};
+use crate::volume::render::{RenderParams, Rendered, render};
+use crate::volume::scene::Scene;
+use std::sync::Arc;
+
+/// How the 3D view's image is made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Method3d {
+    #[value(name = "pt")]
+    PathTracing,
+    /// Second-order occlusion-aware radiance caching.
+    Ours,
+    /// Jarosz et al. 2008 radiance caching.
+    Jarosz08,
+}
+
+impl Method3d {
+    pub const ALL: [Method3d; 3] = [Method3d::PathTracing, Method3d::Ours, Method3d::Jarosz08];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Method3d::PathTracing => "path tracing",
+            Method3d::Ours => "ours",
+            Method3d::Jarosz08 => "Jarosz 2008",
+        }
+    }
+
+    /// The `render3d --method` value.
+    pub fn cli_name(self) -> &'static str {
+        match self {
+            Method3d::PathTracing => "pt",
+            Method3d::Ours => "ours",
+            Method3d::Jarosz08 => "jarosz08",
+        }
+    }
+
+    pub fn cache_method(self) -> Option<CacheMethod> {
+        match self {
+            Method3d::PathTracing => None,
+            Method3d::Ours => Some(CacheMethod::Ours),
+            Method3d::Jarosz08 => Some(CacheMethod::Jarosz08),
+        }
+    }
+}
+
+/// Everything the view's image depends on besides the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct View3dParams {
+    pub method: Method3d,
+    /// The view's image size (the last level's).
+    pub width: usize,
+    pub height: usize,
+    /// Path tracing: the samples per pixel the refinement ends at.
+    pub spp: u32,
+    /// Caches: camera samples per pixel (placement and reconstruction).
+    pub cache_spp: u32,
+    /// Caches: directions per record.
+    pub rays: usize,
+    /// Caches: ray-marched medium samples per direction.
+    pub steps: usize,
+    /// Caches: ε (None: the scene-relative default of `render3d`).
+    pub eps: Option<f64>,
+    pub seed: u64,
+}
+
+impl View3dParams {
+    /// A view `width` pixels wide with the scene's aspect ratio and seed.
+    pub fn for_scene(scene: &Scene, width: usize) -> Self {
+        let [w, h] = scene.desc.render.resolution;
+        let width = width.max(8);
+        View3dParams {
+            method: Method3d::PathTracing,
+            width,
+            height: ((width as f64 * h as f64 / w as f64).round() as usize).max(4),
+            spp: 256,
+            cache_spp: 1,
+            rays: 1024,
+            steps: 24,
+            eps: None,
+            seed: scene.desc.render.seed,
+        }
+    }
+
+    /// The image of one level: `scale` of the view's size, `spp` samples.
+    pub fn image(&self, scene: &Scene, scale: f64, spp: u32) -> RenderParams {
+        RenderParams {
+            width: ((self.width as f64 * scale).round() as usize).max(1),
+            height: ((self.height as f64 * scale).round() as usize).max(1),
+            spp,
+            seed: self.seed,
+            ..RenderParams::from_scene(scene)
+        }
+    }
+
+    /// The path tracer's levels: (fraction of the size, samples per pixel).
+    pub fn pt_levels(&self) -> Vec<(f64, u32)> {
+        let mut v = vec![(0.25, 1), (0.5, 1)];
+        let mut spp = 1;
+        while spp < self.spp {
+            v.push((1.0, spp));
+            spp *= 4;
+        }
+        v.push((1.0, self.spp.max(1)));
+        v
+    }
+
+    /// The cache settings and image of a cached level, as `render3d` builds them
+    /// from its options.
+    pub fn cached(&self, scene: &Scene, method: CacheMethod, scale: f64) -> (CacheSettings, CachedRenderParams) {
+        let image = self.image(scene, scale, self.cache_spp.max(1));
+        let eps = self.eps.unwrap_or_else(|| default_eps(method, scene));
+        let mut cs = CacheSettings::new::<D3>(method, eps, image.settings);
+        cs.probe.rays = self.rays;
+        cs.probe.steps = self.steps;
+        let mut cp = CachedRenderParams::from_scene(scene);
+        cp.image = image;
+        (cs, cp)
+    }
+}
+
+/// One level of the view's image.
+pub struct Frame3d {
+    pub level: usize,
+    pub levels: usize,
+    pub method: Method3d,
+    /// The level's image parameters (size, samples, seed).
+    pub image_params: RenderParams,
+    pub image: Rendered,
+    /// The cache's records (empty for path tracing).
+    pub records: Vec<RecordInfo>,
+    /// ε of the cache (0 for path tracing).
+    pub eps: f64,
+}
+
+/// Compute the view's levels one after the other, sending each as it lands.
+pub fn spawn_render3d(scene: Arc<Scene>, params: View3dParams, notify: Notify) -> Job<Arc<Frame3d>> {
+    Job::spawn(
+        "3D view",
+        Priority::Background,
+        notify,
+        move |r: &Reporter<Arc<Frame3d>>| match params.method.cache_method() {
+            None => {
+                let levels = params.pt_levels();
+                let n = levels.len();
+                for (i, (scale, spp)) in levels.into_iter().enumerate() {
+                    let ip = params.image(&scene, scale, spp);
+                    r.stage(format!(
+                        "path tracing {}/{n}: {}×{} @ {spp} spp",
+                        i + 1,
+                        ip.width,
+                        ip.height
+                    ));
+                    let image = render(&scene, &ip, r.progress())?;
+                    r.add_rays(image.rays);
+                    r.send(Arc::new(Frame3d {
+                        level: i + 1,
+                        levels: n,
+                        method: params.method,
+                        image_params: ip,
+                        image,
+                        records: Vec::new(),
+                        eps: 0.0,
+                    }));
+                }
+                Ok(())
+            }
+            Some(cm) => {
+                let mut memo = RecordMemo::default();
+                let levels = [0.5, 1.0];
+                for (i, scale) in levels.into_iter().enumerate() {
+                    let (cs, cp) = params.cached(&scene, cm, scale);
+                    r.stage(format!(
+                        "{} {}/2: records for {}×{}",
+                        params.method.label(),
+                        i + 1,
+                        cp.image.width,
+                        cp.image.height
+                    ));
+                    let out = render_cached(&scene, &cp, &cs, None, &mut memo, r.progress()).map_err(|e| match e {
+                        crate::volume::cached::CountError::Cancelled(c) => c,
+                        // Without a record-count target the search cannot fail.
+                        other => panic!("cached render: {other}"),
+                    })?;
+                    r.add_rays(out.rays());
+                    r.send(Arc::new(Frame3d {
+                        level: i + 1,
+                        levels: levels.len(),
+                        method: params.method,
+                        image_params: cp.image.clone(),
+                        records: out.placement.records().into_iter().next().unwrap_or_default(),
+                        image: out.reconstruction.image,
+                        eps: cs.eps,
+                    }));
+                }
+                Ok(())
+            }
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn path_tracing_levels_refine_size_then_samples() {
+        let scene = Scene::from_json(
+            super::super::document3d::SHIPPED_SCENES_3D[0].1,
+            "fog_box",
+            std::path::Path::new("."),
+        )
+        .unwrap();
+        let p = View3dParams {
+            spp: 64,
+            ..View3dParams::for_scene(&scene, 160)
+        };
+        assert_eq!(
+            p.pt_levels(),
+            vec![(0.25, 1), (0.5, 1), (1.0, 1), (1.0, 4), (1.0, 16), (1.0, 64)]
+        );
+        assert_eq!(p.image(&scene, 0.5, 2).width, 80);
+    }
+}

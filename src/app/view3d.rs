@@ -1,0 +1,228 @@
+//! The 3D view: the latest image, scaled to fit with its aspect ratio; camera
+//! motion with the mouse (drag: orbit; right or middle drag, or Shift+drag: pan;
+//! wheel: dolly), a click places the probe on that pixel's ray; the cache's
+//! records drawn over the image as discs of their ellipsoids' mean radius,
+//! coloured as `figure compare3d` colours them.
+
+use super::orbit::{dolly, orbit, pan};
+use super::probe3d::Probe3d;
+use super::workbench3d::{RecordShade, Workbench3d};
+use crate::figure::ColorScale;
+use crate::volume::cached::RecordInfo;
+use crate::volume::camera::Camera;
+use eframe::egui::{self, Color32, Pos2, Rect, Sense, Stroke, vec2};
+use glam::{DVec2, DVec3};
+
+/// Radians of orbit per view width dragged.
+const ORBIT_PER_WIDTH: f64 = std::f64::consts::PI;
+/// Dolly factor per scroll point (egui's scroll delta).
+const DOLLY_PER_POINT: f64 = 0.002;
+
+/// A record's disc in image fractions: centre and radius (of the height).
+pub fn record_disc(cam: &Camera, r: &RecordInfo) -> Option<(DVec2, f64)> {
+    let d = r.position - cam.position;
+    let p = cam.project(d)?;
+    let z = d.dot(cam.forward);
+    let mean = (r.radii[0] * r.radii[1] * r.radii[2]).cbrt();
+    if !mean.is_finite() || z <= 0.0 {
+        return None;
+    }
+    // |down| is tan(fov/2): half the image height at distance 1.
+    let radius = 0.5 * mean / (z * cam.down.length());
+    Some((DVec2::new(p.x / cam.width as f64, p.y / cam.height as f64), radius))
+}
+
+/// The attribute a record is coloured by.
+pub fn shade_of(shade: RecordShade, r: &RecordInfo) -> f64 {
+    match shade {
+        RecordShade::Radius => (r.radii[0] * r.radii[1] * r.radii[2]).cbrt(),
+        RecordShade::Luminance => r.luminance,
+        RecordShade::Cost => r.rays as f64,
+    }
+}
+
+/// The largest rectangle of aspect `w`:`h` centred in `avail`.
+fn fit(avail: Rect, w: usize, h: usize) -> Rect {
+    let aspect = w as f32 / h.max(1) as f32;
+    let size = if avail.width() / avail.height().max(1.0) > aspect {
+        vec2(avail.height() * aspect, avail.height())
+    } else {
+        vec2(avail.width(), avail.width() / aspect)
+    };
+    Rect::from_center_size(avail.center(), size)
+}
+
+impl Workbench3d {
+    /// The central view.
+    pub(super) fn view(&mut self, ui: &mut egui::Ui) {
+        let avail = ui.available_rect_before_wrap();
+        let (w, h) = (self.params.width, self.params.height);
+        let rect = fit(avail, w, h);
+        self.view_rect = Some(rect);
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let painter = ui.painter_at(avail);
+        painter.rect_filled(avail, 0.0, Color32::from_gray(20));
+        self.update_texture(ui.ctx());
+        match &self.texture {
+            Some((tex, _, _)) => {
+                let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
+                painter.image(tex.id(), rect, uv, Color32::WHITE);
+            }
+            None => {
+                painter.text(
+                    rect.center(),
+                    egui::Align2::CENTER_CENTER,
+                    "rendering…",
+                    egui::FontId::proportional(16.0),
+                    Color32::GRAY,
+                );
+            }
+        }
+        if !self.frame_is_current() && self.frame().is_some() {
+            painter.text(
+                rect.left_top() + vec2(6.0, 6.0),
+                egui::Align2::LEFT_TOP,
+                "refining…",
+                egui::FontId::proportional(13.0),
+                Color32::from_rgb(255, 210, 120),
+            );
+        }
+        self.records_drawn = if self.display.show_records {
+            self.draw_records(&painter, rect)
+        } else {
+            0
+        };
+        self.draw_probe(&painter, rect);
+        self.camera_input(ui, &response, rect);
+    }
+
+    fn update_texture(&mut self, ctx: &egui::Context) {
+        let Some(frame) = self.frame().cloned() else { return };
+        let stale = match &self.texture {
+            Some((_, n, d)) => *n != self.frames || *d != self.display,
+            None => true,
+        };
+        if !stale {
+            return;
+        }
+        let rgba = self.display_rgba(&frame);
+        let image = egui::ColorImage::from_rgba_unmultiplied([frame.image.width, frame.image.height], &rgba);
+        match &mut self.texture {
+            Some((t, n, d)) => {
+                t.set(image, egui::TextureOptions::LINEAR);
+                (*n, *d) = (self.frames, self.display);
+            }
+            None => {
+                let t = ctx.load_texture("view3d", image, egui::TextureOptions::LINEAR);
+                self.texture = Some((t, self.frames, self.display));
+            }
+        }
+    }
+
+    /// Draw the current frame's records; returns how many were drawn.
+    fn draw_records(&self, painter: &egui::Painter, rect: Rect) -> usize {
+        let Some(frame) = self.render.current() else { return 0 };
+        let mut drawn = 0;
+        let cam = &self.doc.scene().camera;
+        let shade = self.display.record_shade;
+        let scale = ColorScale::auto(frame.records.iter().map(|r| shade_of(shade, r)), true);
+        for r in &frame.records {
+            let Some((c, radius)) = record_disc(cam, r) else {
+                continue;
+            };
+            let centre = rect.min + vec2(c.x as f32 * rect.width(), c.y as f32 * rect.height());
+            if !rect.expand(50.0).contains(centre) {
+                continue;
+            }
+            let [cr, cg, cb] = scale.color(shade_of(shade, r));
+            let px = (radius as f32 * rect.height()).clamp(1.5, 4.0 * rect.height());
+            painter.circle_stroke(
+                centre,
+                px,
+                Stroke::new(1.0, Color32::from_rgba_unmultiplied(cr, cg, cb, 200)),
+            );
+            drawn += 1;
+        }
+        drawn
+    }
+
+    fn draw_probe(&self, painter: &egui::Painter, rect: Rect) {
+        let Some(p) = &self.probe else { return };
+        let c = rect.min + vec2(p.pixel.x as f32 * rect.width(), p.pixel.y as f32 * rect.height());
+        let s = Stroke::new(2.0, Color32::from_rgb(255, 80, 200));
+        painter.line_segment([c - vec2(7.0, 0.0), c + vec2(7.0, 0.0)], s);
+        painter.line_segment([c - vec2(0.0, 7.0), c + vec2(0.0, 7.0)], s);
+        painter.circle_stroke(c, 4.0, s);
+    }
+
+    fn camera_input(&mut self, ui: &egui::Ui, response: &egui::Response, rect: Rect) {
+        let cam = self.doc.desc().camera.clone();
+        let mut moved = None;
+        if response.dragged() {
+            let d = response.drag_delta();
+            let (dx, dy) = (d.x as f64, d.y as f64);
+            let shift = ui.input(|i| i.modifiers.shift);
+            let panning = shift
+                || response.dragged_by(egui::PointerButton::Secondary)
+                || response.dragged_by(egui::PointerButton::Middle);
+            let hgt = rect.height().max(1.0) as f64;
+            moved = Some(if panning {
+                pan(&cam, dx / hgt, dy / hgt)
+            } else {
+                let per = ORBIT_PER_WIDTH / rect.width().max(1.0) as f64;
+                orbit(&cam, -dx * per, dy * per)
+            });
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y) as f64;
+            if scroll != 0.0 {
+                moved = Some(dolly(&cam, (-scroll * DOLLY_PER_POINT).exp(), self.doc.scene().scale));
+            }
+        }
+        if let Some(c) = moved
+            && let Err(e) = self.doc.set_camera(c)
+        {
+            self.error(e.to_string());
+        }
+        if response.clicked()
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            let f = (pos - rect.min) / rect.size();
+            let pixel = DVec2::new(f.x as f64, f.y as f64);
+            self.probe = Some(Probe3d::at_pixel(self.doc.scene(), pixel));
+        }
+    }
+}
+
+/// The unit direction from the camera through image fractions `pixel`.
+pub fn pixel_direction(cam: &Camera, pixel: DVec2) -> DVec3 {
+    cam.direction(pixel * DVec2::new(cam.width as f64, cam.height as f64))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_record_projects_where_its_centre_is_seen_with_its_radius() {
+        let cam = Camera::new(DVec3::ZERO, -DVec3::Z, DVec3::Y, 90.0, 200, 100);
+        let r = RecordInfo {
+            position: pixel_direction(&cam, DVec2::new(0.25, 0.75)) * 3.0,
+            axes: [DVec3::X, DVec3::Y, DVec3::Z],
+            radii: [0.5, 0.5, 0.5],
+            luminance: 1.0,
+            rays: 64,
+        };
+        let (c, radius) = record_disc(&cam, &r).unwrap();
+        assert!((c - DVec2::new(0.25, 0.75)).length() < 1e-9);
+        // At fov 90° the image's half height at depth z is z: radius 0.5 at depth
+        // z is 0.25/z of the height.
+        let z = r.position.dot(-DVec3::Z);
+        assert!((radius - 0.25 / z).abs() < 1e-12);
+        let behind = RecordInfo {
+            position: DVec3::Z,
+            ..r
+        };
+        assert!(record_disc(&cam, &behind).is_none());
+    }
+}

@@ -1,0 +1,330 @@
+//! The 3D mode's state and scheduling: the scene ([`Document3d`]), what the view
+//! renders ([`View3dParams`]) and how it is shown. [`Workbench3d::tick`] (no UI)
+//! takes in results and restarts the render job when the scene, the camera or the
+//! parameters change, cancelling the stale one; the widgets are in
+//! [`super::panel3d`] (side panel, status bar) and [`super::view3d`] (the image,
+//! camera motion, overlays).
+
+use super::document3d::Document3d;
+use super::jobs::{Notify, Slot, no_notify};
+use super::probe3d::{Probe3d, Probe3dKey, Probe3dResult, spawn_probe3d};
+use super::render3d_job::{Frame3d, Method3d, View3dParams, spawn_render3d};
+use crate::figure::{auto_exposure, colormap::tonemap};
+use crate::output::image_field;
+use eframe::egui;
+use std::sync::Arc;
+
+/// The default width of the view's image, pixels (the aspect is the scene's).
+pub const DEFAULT_VIEW_WIDTH: usize = 200;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderKey {
+    revision: u64,
+    params: View3dParams,
+}
+
+/// What colours the records drawn over the image (as `figure compare3d`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RecordShade {
+    /// Geometric mean of the ellipsoid's radii.
+    Radius,
+    Luminance,
+    /// Rays traced for its light field.
+    Cost,
+}
+
+/// How the image is shown (changing it never recomputes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Display3d {
+    /// The medium's in-scattered part alone (∫ T L_s dt), not the whole image.
+    pub medium_only: bool,
+    pub auto_exposure: bool,
+    pub exposure: f64,
+    pub show_records: bool,
+    pub record_shade: RecordShade,
+}
+
+pub struct Workbench3d {
+    pub doc: Document3d,
+    pub params: View3dParams,
+    pub display: Display3d,
+    pub render: Slot<RenderKey, Arc<Frame3d>>,
+    pub probe: Option<Probe3d>,
+    pub probe_job: Slot<Probe3dKey, Arc<Probe3dResult>>,
+    /// The file field of the side panel (Open / Save).
+    pub scene_path: String,
+    pub message: Option<(String, bool)>,
+    pub(super) notify: Notify,
+    pub(super) has_ctx: bool,
+    /// The image's texture and the frame and display it shows.
+    pub(super) texture: Option<(egui::TextureHandle, usize, Display3d)>,
+    /// Counts frames taken in, so the texture knows when to update.
+    pub(super) frames: usize,
+    /// Written once the view (and the probe) finished refining.
+    pub ready_file: Option<std::path::PathBuf>,
+    pub show_inspector: bool,
+    /// Where the image was drawn last frame (tests click and drag in it).
+    pub view_rect: Option<egui::Rect>,
+    /// Record discs the view drew last frame (tests check the overlay through it).
+    pub records_drawn: usize,
+    stats: super::frame_stats::FrameStats,
+}
+
+impl Workbench3d {
+    pub fn new(doc: Document3d) -> Self {
+        let params = View3dParams::for_scene(doc.scene(), DEFAULT_VIEW_WIDTH);
+        Workbench3d {
+            scene_path: doc.path().map_or(String::new(), |p| p.display().to_string()),
+            params,
+            display: Display3d {
+                medium_only: false,
+                auto_exposure: true,
+                exposure: doc.desc().render.exposure,
+                show_records: true,
+                record_shade: RecordShade::Radius,
+            },
+            doc,
+            render: Slot::default(),
+            probe: None,
+            probe_job: Slot::default(),
+            message: None,
+            notify: no_notify(),
+            has_ctx: false,
+            texture: None,
+            frames: 0,
+            ready_file: None,
+            show_inspector: true,
+            records_drawn: 0,
+            view_rect: None,
+            stats: super::frame_stats::FrameStats::from_env(),
+        }
+    }
+
+    /// Apply the command line's start options (`volcache app SCENE3D …`).
+    pub fn start(&mut self, s: &super::StartOptions) {
+        if let Some(m) = s.method3d {
+            self.params.method = m;
+        }
+        if let Some(w) = s.view_width {
+            let width = self.params.width;
+            self.params = View3dParams {
+                method: self.params.method,
+                ..View3dParams::for_scene(self.doc.scene(), if w > 0 { w } else { width })
+            };
+        }
+        if let Some(p) = s.pixel {
+            let pixel = p.clamp(glam::DVec2::ZERO, glam::DVec2::ONE);
+            let mut probe = super::probe3d::Probe3d::at_pixel(self.doc.scene(), pixel);
+            probe.reference = s.reference;
+            self.probe = Some(probe);
+        }
+        self.ready_file = s.ready_file.clone();
+    }
+
+    pub fn info(&mut self, s: impl Into<String>) {
+        self.message = Some((s.into(), false));
+    }
+
+    pub fn error(&mut self, s: impl Into<String>) {
+        self.message = Some((s.into(), true));
+    }
+
+    /// Take in results; start (and cancel) jobs for the current state.
+    pub fn tick(&mut self) {
+        if self.render.update() {
+            self.frames += 1;
+        }
+        self.probe_job.update();
+        let key = RenderKey {
+            revision: self.doc.revision(),
+            params: self.params.clone(),
+        };
+        let (scene, params, notify) = (self.doc.scene().clone(), self.params.clone(), self.notify.clone());
+        self.render.ensure(key, || spawn_render3d(scene, params, notify));
+        if let Some(p) = &self.probe {
+            let key = p.key(self.doc.revision(), &self.params);
+            let (scene, probe, notify) = (self.doc.scene().clone(), p.clone(), self.notify.clone());
+            let params = self.params.clone();
+            self.probe_job
+                .ensure(key, || spawn_probe3d(scene, probe, params, notify));
+        } else {
+            self.probe_job.reset(true);
+        }
+    }
+
+    /// The latest frame, whichever state it was computed for.
+    pub fn frame(&self) -> Option<&Arc<Frame3d>> {
+        self.render.latest()
+    }
+
+    /// The latest frame belongs to the current scene, camera and parameters.
+    pub fn frame_is_current(&self) -> bool {
+        self.render.current().is_some()
+    }
+
+    /// The refinement finished for the current state.
+    pub fn settled(&self) -> bool {
+        self.render.is_done() && (self.probe.is_none() || self.probe_job.is_done())
+    }
+
+    pub fn set_method(&mut self, m: Method3d) {
+        self.params.method = m;
+    }
+
+    /// The image as shown: the frame's values (or medium part) tone-mapped, RGBA.
+    pub fn display_rgba(&self, frame: &Frame3d) -> Vec<u8> {
+        let img = &frame.image;
+        let values = if self.display.medium_only {
+            &img.medium
+        } else {
+            &img.values
+        };
+        let exposure = if self.display.auto_exposure {
+            auto_exposure(&image_field(img.width, img.height, values))
+        } else {
+            self.display.exposure
+        };
+        values
+            .iter()
+            .flat_map(|v| {
+                let [r, g, b] = tonemap(*v, exposure);
+                [r, g, b, 255]
+            })
+            .collect()
+    }
+
+    /// `volcache render3d …` reproducing the latest frame (the scene as saved:
+    /// with unsaved edits or camera moves the command names a file that differs).
+    pub fn command(&self) -> Option<String> {
+        let f = self.frame()?;
+        let scene = self.doc.path().map_or_else(
+            || format!("scenes3d/{}.json", self.doc.stem()),
+            |p| p.display().to_string(),
+        );
+        let ip = &f.image_params;
+        let mut c = format!(
+            "volcache render3d {scene} --method {} --res {}x{} --spp {} --seed {}",
+            f.method.cli_name(),
+            ip.width,
+            ip.height,
+            ip.spp,
+            ip.seed
+        );
+        if f.method != Method3d::PathTracing {
+            c += &format!(
+                " --eps {:e} --rays {} --steps {}",
+                f.eps, self.params.rays, self.params.steps
+            );
+        }
+        Some(c)
+    }
+
+    pub fn busy(&self) -> bool {
+        self.render.running().is_some() || self.probe_job.running().is_some()
+    }
+
+    /// One frame of the 3D mode: side panel, status bar, inspector, view.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let start = std::time::Instant::now();
+        if !self.has_ctx {
+            let ctx = ui.ctx().clone();
+            self.notify = Arc::new(move || ctx.request_repaint());
+            self.has_ctx = true;
+        }
+        self.tick();
+        if ui.input_mut(|i| i.consume_key(egui::Modifiers::COMMAND, egui::Key::Z)) {
+            self.undo();
+        }
+        if ui.input_mut(|i| i.consume_key(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z)) {
+            self.redo();
+        }
+        egui::Panel::bottom("status3d").show(ui, |ui| self.status_bar(ui));
+        let width = ui.available_rect_before_wrap().width();
+        let (controls_max, inspector_max) = super::layout::panel_max_widths(width, true, self.show_inspector);
+        let scroll = || egui::ScrollArea::both().auto_shrink(false);
+        egui::Panel::left("controls3d")
+            .default_size(super::layout::CONTROLS_WIDTH)
+            .max_size(controls_max)
+            .show(ui, |ui| scroll().show(ui, |ui| self.controls(ui)));
+        if self.show_inspector {
+            egui::Panel::right("inspector3d")
+                .default_size(super::layout::INSPECTOR_WIDTH)
+                .max_size(inspector_max)
+                .show(ui, |ui| scroll().show(ui, |ui| self.inspector(ui)));
+        }
+        egui::CentralPanel::no_frame().show(ui, |ui| self.view(ui));
+        // Restart what this frame's edits made stale now, not a frame later.
+        self.tick();
+        let idle = ui.input(|i| !i.pointer.any_down()) && !ui.ctx().text_edit_focused();
+        if idle {
+            self.doc.end_gesture();
+        }
+        if self.busy() {
+            ui.ctx().request_repaint_after(std::time::Duration::from_millis(100));
+        }
+        if self.ready_file.is_some() && self.settled() {
+            let path = self.ready_file.take().unwrap();
+            if let Err(e) = std::fs::write(&path, "ready\n") {
+                self.error(format!("writing {}: {e}", path.display()));
+            }
+        }
+        let dt = ui.input(|i| i.unstable_dt);
+        if self.stats.record(dt, start.elapsed(), self.busy()) {
+            ui.ctx().request_repaint();
+        }
+    }
+
+    /// Undo / redo with a message.
+    pub fn undo(&mut self) {
+        if self.doc.undo() {
+            self.info("undone");
+        }
+    }
+
+    pub fn redo(&mut self) {
+        if self.doc.redo() {
+            self.info("redone");
+        }
+    }
+
+    /// Load a 3D scene file; on error keep the scene and show why.
+    pub fn load_file(&mut self, path: &std::path::Path) {
+        match Document3d::open(path) {
+            Ok(doc) => self.replace(doc, format!("loaded {}", path.display())),
+            Err(e) => self.error(e.to_string()),
+        }
+    }
+
+    pub fn load_shipped(&mut self, name: &str) {
+        match Document3d::shipped(name) {
+            Ok(doc) => self.replace(doc, format!("loaded the shipped {name} (Save asks for a file name)")),
+            Err(e) => self.error(e.to_string()),
+        }
+    }
+
+    fn replace(&mut self, doc: Document3d, msg: String) {
+        let width = self.params.width;
+        self.scene_path = doc.path().map_or(String::new(), |p| p.display().to_string());
+        self.params = View3dParams {
+            method: self.params.method,
+            ..View3dParams::for_scene(doc.scene(), width)
+        };
+        self.display.exposure = doc.desc().render.exposure;
+        self.doc = doc;
+        self.probe = None;
+        self.info(msg);
+    }
+
+    /// Save the scene (with the current camera) to the file named in the file
+    /// field: never to a name the app made up.
+    pub fn save(&mut self) {
+        let p = std::path::PathBuf::from(self.scene_path.trim());
+        if p.as_os_str().is_empty() {
+            return self.error("type a file name to save the scene to");
+        }
+        match self.doc.save(&p) {
+            Ok(()) => self.info(format!("saved {} (with the current camera)", p.display())),
+            Err(e) => self.error(format!("saving {}: {e:#}", p.display())),
+        }
+    }
+}

@@ -1,0 +1,259 @@
+//! The workbench's 3D mode, headless (egui_kittest): opening a 3D scene, the view
+//! refining and restarting, camera motion, the records overlay, the probe on a
+//! pixel's camera ray against the library's (and the command line's) numbers, and
+//! a 3D file opened from the 2D mode.
+
+use eframe::egui;
+use egui_kittest::Harness;
+use glam::DVec2;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use volcache::app::document3d::Document3d;
+use volcache::app::render3d_job::Method3d;
+use volcache::app::{App, Mode, Workbench, install_fonts};
+
+/// A small foggy room of our own: a floor, a wall that shades part of it, a point
+/// light, a box of fog with g = 0.4.
+const ROOM: &str = r#"{
+  "camera": {"position": [0, 1, 3], "look_at": [0, 0.8, 0], "fov_deg": 50},
+  "shapes": [
+    {"quad": {"origin": [-2, 0, -2], "u": [0, 0, 4], "v": [4, 0, 0]}, "reflectance": 0.6},
+    {"box": {"min": [-0.6, 0, -0.4], "max": [0.2, 1.2, -0.2]}, "reflectance": 0.5}
+  ],
+  "lights": [{"point": {"position": [0.3, 1.6, -1.0], "intensity": 3}}],
+  "medium": {"sigma_a": 0.05, "sigma_s": 0.6, "g": 0.4, "region": {"box": {"min": [-2, 0, -2], "max": [2, 2, 2]}}},
+  "render": {"resolution": [32, 24], "spp": 4, "seed": 3, "max_depth": 8}
+}"#;
+
+fn room_file(dir: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("volcache_app3d_{dir}_{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join("room.json");
+    std::fs::write(&p, ROOM).unwrap();
+    p
+}
+
+/// The 3D mode on `path` with computations small enough for tests.
+fn app(path: &Path) -> App {
+    let mut app = App::volume(Document3d::open(path).unwrap());
+    let w = app.volume_mut();
+    let p = &mut w.params;
+    (p.width, p.height, p.spp, p.rays, p.steps, p.cache_spp) = (16, 12, 4, 64, 4, 1);
+    app
+}
+
+fn harness(app: App) -> Harness<'static, App> {
+    Harness::builder()
+        .with_size([1280.0, 800.0])
+        .with_context_setup(install_fonts)
+        .build_ui_state(|ui, app: &mut App| app.ui(ui), app)
+}
+
+fn step_until(h: &mut Harness<'_, App>, what: &str, done: impl Fn(&App) -> bool) {
+    let start = Instant::now();
+    while !done(h.state()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "timed out waiting for {what}"
+        );
+        h.step();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    h.step();
+}
+
+fn settled(a: &App) -> bool {
+    a.volume.as_ref().is_some_and(|w| w.settled())
+}
+
+#[test]
+fn a_3d_scene_opens_in_3d_mode_and_the_view_refines_to_the_command_lines_image() {
+    let path = room_file("refine");
+    let mut h = harness(app(&path));
+    assert_eq!(h.state().mode, Mode::Volume);
+    step_until(&mut h, "the view to refine", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let f = w.frame().unwrap();
+    assert_eq!(f.level, f.levels, "the last level arrived");
+    assert_eq!((f.image.width, f.image.height, f.image.spp), (16, 12, 4));
+    assert!(f.image.values.iter().all(|v| v.is_finite()));
+    assert!(f.image.values.iter().any(|v| v.x > 0.0));
+    // The level is exactly the library render the command line runs.
+    let scene = w.doc.scene();
+    let direct = volcache::volume::render::render(scene, &f.image_params, &Default::default()).unwrap();
+    assert_eq!(direct.values, f.image.values);
+    let cmd = w.command().unwrap();
+    assert!(cmd.contains("--method pt --res 16x12 --spp 4 --seed 3"), "{cmd}");
+}
+
+#[test]
+fn switching_the_method_or_moving_the_camera_restarts_the_render() {
+    let path = room_file("restart");
+    let mut h = harness(app(&path));
+    step_until(&mut h, "the first level", |a| {
+        a.volume.as_ref().unwrap().frame().is_some()
+    });
+    let starts = h.state().volume.as_ref().unwrap().render.starts;
+    let old = h.state().volume.as_ref().unwrap().render.job().unwrap().watch();
+    h.state_mut().volume_mut().set_method(Method3d::Ours);
+    h.step();
+    let w = h.state().volume.as_ref().unwrap();
+    assert_eq!(w.render.starts, starts + 1);
+    assert!(old.is_cancel_requested() || !old.is_running());
+    // A drag on the view orbits the camera, which restarts the render.
+    let cam0 = w.doc.desc().camera.clone();
+    let rect = h.state().volume.as_ref().unwrap().view_rect.unwrap();
+    let c = rect.center();
+    h.hover_at(c);
+    h.event(egui::Event::PointerButton {
+        pos: c,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.step();
+    for k in 1..=5 {
+        h.hover_at(c + egui::vec2(10.0 * k as f32, 0.0));
+        h.step();
+    }
+    h.event(egui::Event::PointerButton {
+        pos: c + egui::vec2(50.0, 0.0),
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.step();
+    let w = h.state().volume.as_ref().unwrap();
+    assert_ne!(w.doc.desc().camera, cam0, "the drag orbited the camera");
+    assert!(w.render.starts > starts + 1);
+    assert!(w.probe.is_none(), "a drag is not a click");
+}
+
+#[test]
+fn ours_draws_its_records_and_the_overlay_toggles() {
+    let path = room_file("records");
+    let mut a = app(&path);
+    a.volume_mut().set_method(Method3d::Ours);
+    let mut h = harness(a);
+    step_until(&mut h, "the cached view", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let f = w.frame().unwrap();
+    assert!(!f.records.is_empty());
+    assert!(f.image.values.iter().all(|v| v.is_finite()));
+    let drawn = w.records_drawn;
+    assert!(drawn > 0, "records drawn over the image");
+    h.state_mut().volume_mut().display.show_records = false;
+    h.step();
+    assert_eq!(h.state().volume.as_ref().unwrap().records_drawn, 0);
+    assert!(
+        h.state()
+            .volume
+            .as_ref()
+            .unwrap()
+            .command()
+            .unwrap()
+            .contains("--method ours")
+    );
+}
+
+#[test]
+fn a_click_places_a_probe_whose_numbers_are_the_librarys() {
+    let path = room_file("probe");
+    let mut h = harness(app(&path));
+    step_until(&mut h, "the first level", |a| {
+        a.volume.as_ref().unwrap().frame().is_some()
+    });
+    let rect = h.state().volume.as_ref().unwrap().view_rect.unwrap();
+    let at = rect.min + egui::vec2(0.5 * rect.width(), 0.6 * rect.height());
+    h.hover_at(at);
+    for pressed in [true, false] {
+        h.event(egui::Event::PointerButton {
+            pos: at,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        });
+    }
+    h.step();
+    assert!(
+        h.state().volume.as_ref().unwrap().probe.is_some(),
+        "the click placed a probe"
+    );
+    step_until(&mut h, "the probe", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let p = w.probe.as_ref().unwrap();
+    assert!((p.pixel - DVec2::new(0.5, 0.6)).length() < 0.05, "{:?}", p.pixel);
+    let r = w.probe_job.current().unwrap().clone();
+    let scene = w.doc.scene();
+    assert!(r.inside_medium);
+    // The same point and seed through the function `volcache probe --method aware` calls.
+    let ps = volcache::app::probe3d::probe_settings(scene, 64, 4);
+    let d = volcache::study::light_field_derivs::derivatives_at(
+        &**scene,
+        r.at,
+        volcache::pipeline::probe::Outgoing::TowardsPoint(scene.camera.position),
+        volcache::pipeline::derivatives::Method::Aware,
+        &ps,
+        &Default::default(),
+        &Default::default(),
+        r.seed,
+        &Default::default(),
+    )
+    .unwrap();
+    assert_eq!(d.parts.total().luminance(), r.shared.aware.total().luminance());
+    let rows = volcache::app::inspector3d::readouts(w, &r);
+    assert!(rows.iter().all(|row| row.value.is_finite() && row.radii.is_finite()));
+    assert!(rows[0].value > 0.0);
+    let cmd = w.probe_command(&r, "aware");
+    assert!(cmd.contains("--method aware --rays 64 --steps 4 --seed 3"), "{cmd}");
+}
+
+#[test]
+fn editing_the_medium_is_validated_undone_and_saved_only_where_named() {
+    let path = room_file("edit");
+    let mut h = harness(app(&path));
+    h.step();
+    let w = h.state_mut().volume_mut();
+    let starts = w.render.starts;
+    w.doc.edit("g", |d| d.medium.as_mut().unwrap().g = -0.9).unwrap();
+    assert!(w.doc.edit("g", |d| d.medium.as_mut().unwrap().g = -1.2).is_err());
+    h.step();
+    let w = h.state_mut().volume_mut();
+    assert!(w.render.starts > starts, "an edit restarts the render");
+    w.doc
+        .set_camera(volcache::app::orbit::dolly(&w.doc.desc().camera, 0.5, 1.0))
+        .unwrap();
+    let cam = w.doc.desc().camera.clone();
+    w.undo();
+    assert_eq!(w.doc.desc().medium.as_ref().unwrap().g, 0.4);
+    assert_eq!(w.doc.desc().camera, cam);
+    // Save writes the named file, with the moved camera, and only that file.
+    let out = path.with_file_name("saved.json");
+    w.scene_path = out.display().to_string();
+    w.save();
+    let saved = volcache::volume::scene::Scene::load(&out).unwrap();
+    assert_eq!(saved.desc.camera, cam);
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        ROOM,
+        "the opened file is untouched"
+    );
+}
+
+#[test]
+fn a_3d_file_opened_in_2d_mode_switches_to_3d() {
+    let path = room_file("switch");
+    let mut h = harness(App::flat(Workbench::new(volcache::app::Document::default_scene())));
+    h.step();
+    assert_eq!(h.state().mode, Mode::Flatland);
+    h.state_mut().flat.load_scene(&path);
+    h.step();
+    assert_eq!(h.state().mode, Mode::Volume);
+    let w = h.state().volume.as_ref().unwrap();
+    assert_eq!(w.doc.path(), Some(path.as_path()));
+    // The 2D scene is kept for when the user switches back.
+    assert!(h.state().flat.doc.path().is_none());
+    h.state_mut().set_mode(Mode::Flatland);
+    h.step();
+    assert_eq!(h.state().mode, Mode::Flatland);
+}
