@@ -62,3 +62,11 @@ impl Progress {
         if self.is_cancelled() { Err(Cancelled) } else { Ok(()) }
     }
 }
+
+/// A progress handle is its own handle: functions taking "something that holds a
+/// `Progress`" (a command line bar, an app job) accept a plain one too.
+impl AsRef<Progress> for Progress {
+    fn as_ref(&self) -> &Progress {
+        self
+    }
+}

@@ -257,3 +257,77 @@ fn a_3d_file_opened_in_2d_mode_switches_to_3d() {
     h.step();
     assert_eq!(h.state().mode, Mode::Flatland);
 }
+
+#[test]
+fn the_3d_compare_finishes_and_its_copied_command_reproduces_the_numbers() {
+    let path = room_file("compare");
+    let mut h = harness(app(&path));
+    {
+        let w = h.state_mut().volume_mut();
+        w.compare_params = volcache::app::compare3d::Compare3dParams {
+            caches: 40,
+            width: 16,
+            spp: 1,
+            ref_spp: 64,
+            rays: 64,
+            steps: 4,
+            seed: 1,
+        };
+        w.show_compare = true;
+        w.run_compare();
+    }
+    step_until(&mut h, "the comparison", |a| {
+        let w = a.volume.as_ref().unwrap();
+        w.compare_is_current()
+    });
+    let w = h.state().volume.as_ref().unwrap();
+    let result = w.compare.latest().unwrap().clone();
+    let res = result.as_ref().as_ref().expect("40 records are reachable here");
+    assert_eq!(res.runs.len(), 3);
+    for r in &res.runs {
+        assert!(
+            r.errors.rmse.is_finite() && r.medium_errors.rmse.is_finite(),
+            "{}",
+            r.method
+        );
+    }
+    assert!(res.runs[..2].iter().all(|r| r.records.abs_diff(40) <= 2));
+    // The copied command, run by the command line, gives the same records and errors
+    // for both caches (path tracing runs to a time budget: only its method is checked).
+    let dir = path.parent().unwrap();
+    let cmd = w.compare_command();
+    let args: Vec<String> = cmd
+        .split_whitespace()
+        .skip(1)
+        .map(String::from)
+        .chain(
+            [
+                "--ref-cache",
+                &dir.join("refs").display().to_string(),
+                "--out",
+                &dir.join("out").display().to_string(),
+                "--quiet",
+            ]
+            .map(String::from),
+        )
+        .collect();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_volcache"))
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{cmd}: {}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/compare3d_room.json")).unwrap()).unwrap();
+    let runs = report["runs"].as_array().unwrap();
+    for (app_run, cli_run) in res.runs.iter().zip(runs) {
+        assert_eq!(cli_run["method"], app_run.method.as_str());
+        if app_run.records > 0 {
+            assert_eq!(cli_run["records"], app_run.records);
+            assert_eq!(cli_run["errors"]["rmse"].as_f64().unwrap(), app_run.errors.rmse);
+            assert_eq!(
+                cli_run["medium_errors"]["rmse"].as_f64().unwrap(),
+                app_run.medium_errors.rmse
+            );
+        }
+    }
+}

@@ -20,11 +20,15 @@
 //!   its camera, undo, save), [`render3d_job`] (the view's progressive render by
 //!   path tracing, ours or Jarosz 2008), [`orbit`] (camera motion), [`view3d`]
 //!   (the image, mouse, record overlay), [`panel3d`] (side panel, status bar),
-//!   [`probe3d`] and [`inspector3d`] (the probe on a pixel's camera ray).
+//!   [`probe3d`] and [`inspector3d`] (the probe on a pixel's camera ray),
+//!   [`compare3d`] and [`compare3d_view`] (the paper's comparison, as `figure
+//!   compare3d` runs it).
 
 pub mod canvas;
 pub mod command;
 pub mod compare;
+pub mod compare3d;
+pub mod compare3d_view;
 pub mod compare_textures;
 pub mod compare_view;
 pub mod compute;

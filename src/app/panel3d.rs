@@ -100,6 +100,14 @@ impl Workbench3d {
         if ui.button("Reset camera").clicked() {
             self.doc.reset_camera();
         }
+        ui.separator();
+        if ui
+            .button("Compare view…")
+            .on_hover_text("reference, ours and Jarosz 2008 at equal count, path tracing at equal time")
+            .clicked()
+        {
+            self.show_compare = true;
+        }
     }
 
     fn method_controls(&mut self, ui: &mut egui::Ui) {

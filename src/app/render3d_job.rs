@@ -120,18 +120,31 @@ impl View3dParams {
         v
     }
 
-    /// The cache settings and image of a cached level, as `render3d` builds them
-    /// from its options.
+    /// The cache settings and image of a cached level.
     pub fn cached(&self, scene: &Scene, method: CacheMethod, scale: f64) -> (CacheSettings, CachedRenderParams) {
         let image = self.image(scene, scale, self.cache_spp.max(1));
-        let eps = self.eps.unwrap_or_else(|| default_eps(method, scene));
-        let mut cs = CacheSettings::new::<D3>(method, eps, image.settings);
-        cs.probe.rays = self.rays;
-        cs.probe.steps = self.steps;
-        let mut cp = CachedRenderParams::from_scene(scene);
-        cp.image = image;
-        (cs, cp)
+        cache_settings(scene, image, method, self.eps, self.rays, self.steps)
     }
+}
+
+/// Cache settings and image as `render3d` and `figure compare3d` build them from
+/// `--eps --rays --steps` with their other options at their defaults (the copied
+/// commands name these three, so they reproduce the app's numbers).
+pub fn cache_settings(
+    scene: &Scene,
+    image: RenderParams,
+    method: CacheMethod,
+    eps: Option<f64>,
+    rays: usize,
+    steps: usize,
+) -> (CacheSettings, CachedRenderParams) {
+    let eps = eps.unwrap_or_else(|| default_eps(method, scene));
+    let mut cs = CacheSettings::new::<D3>(method, eps, image.settings);
+    cs.probe.rays = rays;
+    cs.probe.steps = steps;
+    let mut cp = CachedRenderParams::from_scene(scene);
+    cp.image = image;
+    (cs, cp)
 }
 
 /// One level of the view's image.

@@ -88,7 +88,7 @@ impl Workbench3d {
             );
         }
         self.records_drawn = if self.display.show_records {
-            self.draw_records(&painter, rect)
+            self.draw_records(&ui.painter_at(rect), rect)
         } else {
             0
         };
@@ -131,7 +131,9 @@ impl Workbench3d {
                 continue;
             };
             let centre = rect.min + vec2(c.x as f32 * rect.width(), c.y as f32 * rect.height());
-            if !rect.expand(50.0).contains(centre) {
+            let px = (radius as f32 * rect.height()).max(1.5);
+            // Only discs that reach into the image (the painter clips to it).
+            if !rect.expand(px).contains(centre) {
                 continue;
             }
             let [cr, cg, cb] = scale.color(shade_of(shade, r));

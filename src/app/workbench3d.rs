@@ -63,6 +63,12 @@ pub struct Workbench3d {
     /// Written once the view (and the probe) finished refining.
     pub ready_file: Option<std::path::PathBuf>,
     pub show_inspector: bool,
+    /// The compare window: its parameters, whether it is open, its job and the
+    /// textures of the result they show.
+    pub compare_params: super::compare3d::Compare3dParams,
+    pub show_compare: bool,
+    pub compare: Slot<(u64, super::compare3d::Compare3dParams), Arc<super::compare3d::Compare3dOutcome>>,
+    pub(super) compare_tex: Option<(Arc<super::compare3d::Compare3dOutcome>, Vec<egui::TextureHandle>)>,
     /// Where the image was drawn last frame (tests click and drag in it).
     pub view_rect: Option<egui::Rect>,
     /// Record discs the view drew last frame (tests check the overlay through it).
@@ -96,6 +102,10 @@ impl Workbench3d {
             show_inspector: true,
             records_drawn: 0,
             view_rect: None,
+            compare_params: Default::default(),
+            show_compare: false,
+            compare: Slot::default(),
+            compare_tex: None,
             stats: super::frame_stats::FrameStats::from_env(),
         }
     }
@@ -135,6 +145,7 @@ impl Workbench3d {
             self.frames += 1;
         }
         self.probe_job.update();
+        self.compare.update();
         let key = RenderKey {
             revision: self.doc.revision(),
             params: self.params.clone(),
@@ -220,7 +231,7 @@ impl Workbench3d {
     }
 
     pub fn busy(&self) -> bool {
-        self.render.running().is_some() || self.probe_job.running().is_some()
+        self.render.running().is_some() || self.probe_job.running().is_some() || self.compare.running().is_some()
     }
 
     /// One frame of the 3D mode: side panel, status bar, inspector, view.
@@ -253,6 +264,7 @@ impl Workbench3d {
                 .show(ui, |ui| scroll().show(ui, |ui| self.inspector(ui)));
         }
         egui::CentralPanel::no_frame().show(ui, |ui| self.view(ui));
+        self.compare_window(ui.ctx());
         // Restart what this frame's edits made stale now, not a frame later.
         self.tick();
         let idle = ui.input(|i| !i.pointer.any_down()) && !ui.ctx().text_edit_focused();

@@ -7,7 +7,7 @@
 use super::common::{ProgressUi, wrote};
 use super::image3d::parse_crop;
 use super::render3d_cache::Cache3dArgs;
-use super::setup3d::{Setup3d, Setup3dArgs, run_cache, setup3d};
+use super::setup3d::{Setup3d, Setup3dArgs, setup3d};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -21,9 +21,7 @@ use volcache::figure::image3d::{
 use volcache::figure::{Cell, compose_grid, shared_error_range, upscale_factor};
 use volcache::output::{image_field, write_exr, write_json, write_png};
 use volcache::study::reference3d::ReferenceInfo3d;
-use volcache::study::runs3d::{Run3d, pt_run};
-use volcache::study::seeds::pt_seed;
-use volcache::volume::cached::RecordMemo;
+use volcache::study::runs3d::{Run3d, compare3d};
 use volcache::volume::render::{RenderParams, camera};
 
 #[derive(Args, Debug)]
@@ -72,12 +70,19 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
     if cache.caches.is_none() && cache.eps.is_none() {
         cache.caches = Some(200);
     }
-    let mut runs = Vec::new();
-    for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
-        let label = format!("{} {method:?}", setup.stem);
-        let memo = &mut RecordMemo::new();
-        runs.push(run_cache(&setup, method, &cache, cache.caches, memo, &label, a.quiet)?);
-    }
+    // Settings checked before anything runs.
+    let settings = [CacheMethod::Ours, CacheMethod::Jarosz08]
+        .map(|m| cache.settings(&setup.scene, &setup.image, m))
+        .into_iter()
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let quiet = a.quiet;
+    let runs = compare3d(
+        &setup.scene,
+        |m| settings[(m == CacheMethod::Jarosz08) as usize].clone(),
+        cache.caches,
+        &setup.reference,
+        |label| ProgressUi::new(&format!("{} {label}", setup.stem), !quiet),
+    )?;
     let Setup3d {
         scene,
         stem,
@@ -85,17 +90,6 @@ pub fn run(a: Compare3dArgs) -> anyhow::Result<ExitCode> {
         reference,
         ref_info,
     } = setup;
-    // Path tracing in the time ours took (its own seed: not the caches' camera rays).
-    let pt_params = RenderParams {
-        spp: 1 << 24,
-        seed: pt_seed(a.setup.seed),
-        time_budget: Some(runs[0].seconds),
-        ..image.clone()
-    };
-    let ui = ProgressUi::new(&format!("{stem} pt (equal time)"), !a.quiet);
-    let pt = pt_run(&scene, &pt_params, &reference, &ui.progress);
-    ui.finish();
-    runs.push(pt?);
     for r in &runs {
         eprintln!(
             "{:>8}: {:>5} records, {:>8.2} s, {:.3e} rays, RMSE {:.4e}, medium part {:.4e}",

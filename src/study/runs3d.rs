@@ -11,6 +11,7 @@ use crate::core::metric::CacheMethod;
 use crate::core::stats::{ImageErrors, luminance_errors};
 use crate::pipeline::placement::CountError;
 use crate::progress::Progress;
+use crate::study::seeds::pt_seed;
 use crate::volume::cached::{CacheSettings, CachedRenderParams, RecordInfo, RecordMemo, render_cached};
 use crate::volume::render::{RenderParams, Rendered, render};
 use crate::volume::scene::Scene;
@@ -105,6 +106,37 @@ pub fn pt_run(
 ) -> Result<Run3d, CountError> {
     let img = render(scene, image, progress)?;
     Ok(Run3d::rendered("pt", img, reference))
+}
+
+/// The paper's 3D comparison (`figure compare3d` and the app's 3D compare view):
+/// ours, then Jarosz 2008, at `target` records (or at their ε), each with a memo
+/// of its own, then path tracing in the time ours took on its own streams
+/// ([`pt_seed`] of the image's seed), all against `reference`. `settings` gives a
+/// method's cache settings and image; `progress` a handle per run, by label.
+pub fn compare3d<P: AsRef<Progress>>(
+    scene: &Scene,
+    settings: impl Fn(CacheMethod) -> (CacheSettings, CachedRenderParams),
+    target: Option<usize>,
+    reference: &Rendered,
+    progress: impl Fn(&str) -> P,
+) -> Result<Vec<Run3d>, CountError> {
+    let mut runs = Vec::new();
+    for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+        let (cs, cp) = settings(method);
+        let handle = progress(method_name(method));
+        let memo = &mut RecordMemo::new();
+        runs.push(cache_run(scene, &cs, &cp, target, memo, reference, handle.as_ref())?);
+    }
+    let image = settings(CacheMethod::Ours).1.image;
+    let pt_params = RenderParams {
+        spp: 1 << 24,
+        seed: pt_seed(image.seed),
+        time_budget: Some(runs[0].seconds),
+        ..image
+    };
+    let handle = progress("pt (equal time)");
+    runs.push(pt_run(scene, &pt_params, reference, handle.as_ref())?);
+    Ok(runs)
 }
 
 /// The (x, RMSE) points of `method`'s runs, sorted by x: of the image, or of its
