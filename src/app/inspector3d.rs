@@ -11,8 +11,10 @@ use crate::core::metric::{CacheMethod, first_order_extent, second_order_extent};
 use crate::core::space::{D3, Space};
 use crate::core::taylor_rgb::PartDerivs;
 use crate::figure::ColorScale;
-use eframe::egui::{self, Color32, Rect, Sense, vec2};
+use eframe::egui::{self, vec2};
 use glam::DVec3;
+use std::sync::Arc;
+use tiny_skia::{Paint, PathBuilder, Pixmap, Transform};
 
 /// One method's row of the readout (luminance of the total L_s).
 #[derive(Clone, Debug, PartialEq)]
@@ -143,33 +145,81 @@ impl Workbench3d {
         });
         ui.separator();
         ui.label("incoming light (equal-area map, log luminance; up at the top)");
-        light_field_map(ui, &r);
+        ui.checkbox(&mut self.show_proxy, "proxy triangles (bridging ones in magenta)");
+        let w = ui.available_width().clamp(120.0, 360.0);
+        let size = vec2(w, w / std::f32::consts::PI);
+        let ppp = ui.ctx().pixels_per_point();
+        let (pw, ph) = ((size.x * ppp).round() as u32, (size.y * ppp).round() as u32);
+        let fresh = self
+            .light_field_tex
+            .as_ref()
+            .is_some_and(|(k, proxy, pw0, _)| Arc::ptr_eq(k, &r) && *proxy == self.show_proxy && *pw0 == pw);
+        if !fresh {
+            let pm = light_field_pixmap(&r, self.show_proxy, pw, ph);
+            let image =
+                egui::ColorImage::from_rgba_premultiplied([pm.width() as usize, pm.height() as usize], pm.data());
+            let tex = ui
+                .ctx()
+                .load_texture("light_field3d", image, egui::TextureOptions::LINEAR);
+            self.light_field_tex = Some((r.clone(), self.show_proxy, pw, tex));
+        }
+        if let Some((_, _, _, tex)) = &self.light_field_tex {
+            ui.image((tex.id(), size));
+        }
     }
 }
 
-/// Each ray's incoming luminance as a dot on the equal-area cylindrical map.
-fn light_field_map(ui: &mut egui::Ui, r: &Probe3dResult) {
-    let w = ui.available_width().clamp(120.0, 360.0);
-    let (rect, _) = ui.allocate_exact_size(vec2(w, w / std::f32::consts::PI), Sense::hover());
-    let painter = ui.painter_at(rect);
-    painter.rect_filled(rect, 0.0, Color32::from_gray(15));
+/// Each ray's incoming luminance as a dot on the equal-area cylindrical map, and
+/// the proxy's triangles over it (those crossing the map's seam are left out),
+/// on a `w` × `h` pixmap. Rasterised once per result: thousands of dots and
+/// triangles tessellated every UI frame would hold the UI thread.
+pub fn light_field_pixmap(r: &Probe3dResult, proxy: bool, w: u32, h: u32) -> Pixmap {
+    let mut pm = Pixmap::new(w.max(1), h.max(1)).expect("a positive size");
+    pm.fill(tiny_skia::Color::from_rgba8(15, 15, 15, 255));
+    let (fw, fh) = (pm.width() as f32, pm.height() as f32);
     let total = |i: &super::probe3d::Incoming3| i.surface + i.medium;
     let scale = ColorScale::auto(r.incoming.iter().map(total), true);
-    let dot = (rect.width() * rect.height() / r.incoming.len().max(1) as f32)
-        .sqrt()
-        .clamp(1.0, 6.0);
+    let dot = (fw * fh / r.incoming.len().max(1) as f32).sqrt().clamp(1.0, 6.0);
+    let mut paint = Paint::default();
     for i in &r.incoming {
         let (x, y) = equal_area(i.dir);
-        let c = rect.min + vec2(x as f32 * rect.width(), y as f32 * rect.height());
         let v = total(i);
-        let color = if v > 0.0 {
-            let [cr, cg, cb] = scale.color(v);
-            Color32::from_rgb(cr, cg, cb)
-        } else {
-            Color32::BLACK
-        };
-        painter.rect_filled(Rect::from_center_size(c, vec2(dot, dot)), 0.0, color);
+        let [cr, cg, cb] = if v > 0.0 { scale.color(v) } else { [0, 0, 0] };
+        paint.set_color_rgba8(cr, cg, cb, 255);
+        let (cx, cy) = (x as f32 * fw, y as f32 * fh);
+        if let Some(rect) = tiny_skia::Rect::from_xywh(cx - 0.5 * dot, cy - 0.5 * dot, dot, dot) {
+            pm.fill_rect(rect, &paint, Transform::identity(), None);
+        }
     }
+    if !proxy {
+        return pm;
+    }
+    let x = r.shared.light_field.x;
+    let stroke = tiny_skia::Stroke {
+        width: 0.6,
+        ..Default::default()
+    };
+    paint.anti_alias = true;
+    for e in &r.shared.elements {
+        let p = e.v.map(|v| equal_area((v - x).normalize_or_zero()));
+        if (0..3).any(|i| (p[i].0 - p[(i + 1) % 3].0).abs() > 0.5) {
+            continue;
+        }
+        let mut pb = PathBuilder::new();
+        pb.move_to(p[0].0 as f32 * fw, p[0].1 as f32 * fh);
+        for q in &p[1..] {
+            pb.line_to(q.0 as f32 * fw, q.1 as f32 * fh);
+        }
+        pb.close();
+        let Some(path) = pb.finish() else { continue };
+        if e.bridging {
+            paint.set_color_rgba8(255, 60, 220, 255);
+        } else {
+            paint.set_color_rgba8(255, 255, 255, 40);
+        }
+        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+    }
+    pm
 }
 
 /// Lambert's cylindrical equal-area projection of a direction (y up) to [0, 1]²:

@@ -12,6 +12,7 @@ use crate::volume::cached::RecordInfo;
 use crate::volume::camera::Camera;
 use eframe::egui::{self, Color32, Pos2, Rect, Sense, Stroke, vec2};
 use glam::{DVec2, DVec3};
+use tiny_skia::{Paint, PathBuilder, Pixmap, Transform};
 
 /// Radians of orbit per view width dragged.
 const ORBIT_PER_WIDTH: f64 = std::f64::consts::PI;
@@ -30,6 +31,38 @@ pub fn record_disc(cam: &Camera, r: &RecordInfo) -> Option<(DVec2, f64)> {
     // |down| is tan(fov/2): half the image height at distance 1.
     let radius = 0.5 * mean / (z * cam.down.length());
     Some((DVec2::new(p.x / cam.width as f64, p.y / cam.height as f64), radius))
+}
+
+/// The records' outlines on a transparent `w` × `h` pixmap covering the image:
+/// discs of their mean radius, translucent so that where records pile up their
+/// ink reads as density. Returns the pixmap and how many discs reach into it.
+pub fn records_pixmap(cam: &Camera, records: &[RecordInfo], shade: RecordShade, w: u32, h: u32) -> (Pixmap, usize) {
+    let mut pm = Pixmap::new(w, h).expect("a positive size");
+    let scale = ColorScale::auto(records.iter().map(|r| shade_of(shade, r)), true);
+    let (fw, fh) = (w as f32, h as f32);
+    let stroke = tiny_skia::Stroke {
+        width: 1.0,
+        ..Default::default()
+    };
+    let mut drawn = 0;
+    for r in records {
+        let Some((c, radius)) = record_disc(cam, r) else {
+            continue;
+        };
+        let (x, y) = (c.x as f32 * fw, c.y as f32 * fh);
+        let px = (radius as f32 * fh).max(1.5);
+        let reaches = x + px >= 0.0 && x - px <= fw && y + px >= 0.0 && y - px <= fh;
+        let Some(circle) = PathBuilder::from_circle(x, y, px.min(8.0 * fh)).filter(|_| reaches) else {
+            continue;
+        };
+        let [cr, cg, cb] = scale.color(shade_of(shade, r));
+        let mut paint = Paint::default();
+        paint.set_color_rgba8(cr, cg, cb, 120);
+        paint.anti_alias = true;
+        pm.stroke_path(&circle, &paint, &stroke, Transform::identity(), None);
+        drawn += 1;
+    }
+    (pm, drawn)
 }
 
 /// The attribute a record is coloured by.
@@ -119,33 +152,34 @@ impl Workbench3d {
         }
     }
 
-    /// Draw the current frame's records; returns how many were drawn.
-    fn draw_records(&self, painter: &egui::Painter, rect: Rect) -> usize {
-        let Some(frame) = self.render.current() else { return 0 };
-        let mut drawn = 0;
-        let cam = &self.doc.scene().camera;
-        let shade = self.display.record_shade;
-        let scale = ColorScale::auto(frame.records.iter().map(|r| shade_of(shade, r)), true);
-        for r in &frame.records {
-            let Some((c, radius)) = record_disc(cam, r) else {
-                continue;
-            };
-            let centre = rect.min + vec2(c.x as f32 * rect.width(), c.y as f32 * rect.height());
-            let px = (radius as f32 * rect.height()).max(1.5);
-            // Only discs that reach into the image (the painter clips to it).
-            if !rect.expand(px).contains(centre) {
-                continue;
-            }
-            let [cr, cg, cb] = scale.color(shade_of(shade, r));
-            let px = (radius as f32 * rect.height()).clamp(1.5, 4.0 * rect.height());
-            painter.circle_stroke(
-                centre,
-                px,
-                Stroke::new(1.0, Color32::from_rgba_unmultiplied(cr, cg, cb, 200)),
-            );
-            drawn += 1;
+    /// Draw the current frame's records; returns how many were drawn. They are
+    /// rasterised once per frame, shading and size into a texture (tiny-skia):
+    /// hundreds of large translucent outlines tessellated anew every UI frame cost
+    /// the UI thread ~40 ms a frame under llvmpipe.
+    fn draw_records(&mut self, painter: &egui::Painter, rect: Rect) -> usize {
+        let Some(frame) = self.render.current().cloned() else {
+            return 0;
+        };
+        let ppp = painter.ctx().pixels_per_point();
+        let (w, h) = (
+            (rect.width() * ppp).round() as u32,
+            (rect.height() * ppp).round() as u32,
+        );
+        let key = (self.frames, self.display.record_shade, w, h, self.doc.revision());
+        if self.records_tex.as_ref().is_none_or(|(k, _, _)| *k != key) {
+            let cam = &self.doc.scene().camera;
+            let (pm, drawn) = records_pixmap(cam, &frame.records, self.display.record_shade, w.max(1), h.max(1));
+            let image =
+                egui::ColorImage::from_rgba_premultiplied([pm.width() as usize, pm.height() as usize], pm.data());
+            let tex = painter
+                .ctx()
+                .load_texture("records3d", image, egui::TextureOptions::LINEAR);
+            self.records_tex = Some((key, tex, drawn));
         }
-        drawn
+        let (_, tex, drawn) = self.records_tex.as_ref().unwrap();
+        let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
+        painter.image(tex.id(), rect, uv, Color32::WHITE);
+        *drawn
     }
 
     fn draw_probe(&self, painter: &egui::Painter, rect: Rect) {

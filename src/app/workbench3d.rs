@@ -17,6 +17,10 @@ use std::sync::Arc;
 /// The default width of the view's image, pixels (the aspect is the scene's).
 pub const DEFAULT_VIEW_WIDTH: usize = 200;
 
+/// What the records' overlay texture was drawn for: frame, shading, size in
+/// pixels, scene revision.
+pub type RecordsTexKey = (usize, RecordShade, u32, u32, u64);
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderKey {
     revision: u64,
@@ -63,6 +67,8 @@ pub struct Workbench3d {
     /// Written once the view (and the probe) finished refining.
     pub ready_file: Option<std::path::PathBuf>,
     pub show_inspector: bool,
+    /// The probe inspector draws the proxy's triangles on its light-field map.
+    pub show_proxy: bool,
     /// The compare window: its parameters, whether it is open, its job and the
     /// textures of the result they show.
     pub compare_params: super::compare3d::Compare3dParams,
@@ -71,6 +77,11 @@ pub struct Workbench3d {
     pub(super) compare_tex: Option<(Arc<super::compare3d::Compare3dOutcome>, Vec<egui::TextureHandle>)>,
     /// Where the image was drawn last frame (tests click and drag in it).
     pub view_rect: Option<egui::Rect>,
+    /// The records' overlay texture, its key (frame, shading, size, revision) and
+    /// how many discs it holds.
+    pub(super) records_tex: Option<(RecordsTexKey, egui::TextureHandle, usize)>,
+    /// The probe inspector's light-field map: its result, proxy shown, width, texture.
+    pub(super) light_field_tex: Option<(Arc<Probe3dResult>, bool, u32, egui::TextureHandle)>,
     /// Record discs the view drew last frame (tests check the overlay through it).
     pub records_drawn: usize,
     stats: super::frame_stats::FrameStats,
@@ -100,7 +111,10 @@ impl Workbench3d {
             frames: 0,
             ready_file: None,
             show_inspector: true,
+            show_proxy: true,
             records_drawn: 0,
+            records_tex: None,
+            light_field_tex: None,
             view_rect: None,
             compare_params: Default::default(),
             show_compare: false,
