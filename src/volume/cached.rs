@@ -80,7 +80,7 @@ impl QuerySource<D3> for CameraSamples<'_> {
         let ip = &self.params.image;
         for sample in 0..ip.spp {
             let (ray, _) = CameraRay::trace(self.scene, &self.cam, pixel, sample, ip.seed);
-            for (i, t) in ray.march(self.params.march_step) {
+            for (i, t, _) in ray.march(self.params.march_step) {
                 let (p, k, i) = (pixel as u64, sample as u64, i as u64);
                 out.push(QueryPoint {
                     key: ((p as u128) << 64) | ((k as u128) << 32) | i as u128,

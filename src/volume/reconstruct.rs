@@ -125,11 +125,12 @@ where
                             phase: m.phase,
                             travel: ray.dir,
                         };
-                        for (_, t) in ray.march(params.march_step) {
+                        for (_, t, weight) in ray.march(params.march_step) {
                             let p = ray.at(t);
                             let v = l_s(p, &lobe, m.sigma_s, &mut s, &mut rays);
                             uncovered += v.is_none() as u64;
-                            medium += m.transmittance(ray.origin, ray.dir, t) * v.unwrap_or(Rgb::ZERO) * dt;
+                            let seen = m.transmittance(ray.origin, ray.dir, t) * weight;
+                            medium += seen * v.unwrap_or(Rgb::ZERO) * dt;
                         }
                     }
                     let total = surface + medium;
