@@ -206,6 +206,23 @@ fn a_click_places_a_probe_whose_numbers_are_the_librarys() {
     assert!(rows[0].value > 0.0);
     let cmd = w.probe_command(&r, "aware");
     assert!(cmd.contains("--method aware --rays 64 --steps 4 --seed 3"), "{cmd}");
+    // And the copied command, run, prints those numbers.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_volcache"))
+        .args(cmd.split_whitespace().skip(1))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{cmd}: {}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let lum = r.shared.aware.total().luminance();
+    let t = &json[0]["total"]["luminance"];
+    assert_eq!(t["value"].as_f64().unwrap(), lum.value);
+    let g: Vec<f64> = t["gradient"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(g, lum.grad.to_array().to_vec());
 }
 
 #[test]

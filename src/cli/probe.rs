@@ -60,13 +60,8 @@ pub fn run(a: ProbeArgs) -> anyhow::Result<ExitCode> {
             let w = DVec2::from_angle(deg.to_radians());
             at_points(&**s, &a.points2()?, &c, a.method, quantity, Some(deg), |_| w)
         }
+        AnyScene::Volume(s) if a.method != Method::Pt => return super::probe_derivs::run3(&a, s),
         AnyScene::Volume(s) => {
-            anyhow::ensure!(
-                a.method == Method::Pt,
-                "--method {}: 3D points are probed by path tracing (--method pt); \
-                 3D derivatives are render3d's (--method ours|jarosz08)",
-                format!("{:?}", a.method).to_lowercase()
-            );
             anyhow::ensure!(
                 a.omega_o.is_none(),
                 "--omega-o: in a 3D scene L_s leaves each point towards the camera, as render3d caches it"
