@@ -314,3 +314,54 @@ fn open_offers_the_shipped_scenes_and_browses_folders() {
     h.get_by_label("volcache workbench: c");
     assert_eq!(h.state().doc.path(), Some(sub.join("c.json").as_path()));
 }
+
+/// The gradient overlay as the paper draws it: after the first grid it refines
+/// level by level up to one cell per pixel of the field (24² here), each level's
+/// angle-coded image at that resolution; the arrows are optional (and at most 24
+/// per side); with refinement off the grid stays as set.
+#[test]
+fn the_gradient_image_refines_to_the_fields_resolution_and_arrows_are_optional() {
+    let mut wb = workbench();
+    wb.overlays.set(Overlay::Gradients, true);
+    let mut h = harness(wb);
+    step_until(&mut h, "the per-pixel gradient image", |w| {
+        w.gradient_grid()
+            .is_some_and(|g| g.n == 24 && g.points.len() == 24 * 24)
+    });
+    h.step();
+    let g = h.state().gradient_grid().unwrap().clone();
+    assert!(g.points.iter().all(|p| p.aware.is_none_or(|d| d.is_finite())));
+    let view = volcache::app::overlay::gradient_view(&g, true, h.state().field_params.part);
+    assert_eq!(view.image.size, [24, 24]);
+    let with_arrows = h.state().shapes_drawn;
+    h.state_mut().gradient_arrows = false;
+    h.run_steps(2);
+    let without = h.state().shapes_drawn;
+    assert!(with_arrows >= without + 2 * 24 * 24 / 2, "{with_arrows} vs {without}");
+    assert_eq!(volcache::app::overlay::arrow_stride(24), 1);
+    assert_eq!(volcache::app::overlay::arrow_stride(256), 11);
+    // Refinement off: the grid stays at the 4 × 4 asked for.
+    h.state_mut().method.grid_refine = false;
+    step_until(&mut h, "the 4 × 4 grid", |w| {
+        w.gradient_grid().is_some_and(|g| g.n == 4 && g.points.len() == 16)
+    });
+}
+
+/// A reference of a few samples per stencil point has Hessian eigenvalues within
+/// their standard errors: the inspector says so (and its ellipse is dashed, see
+/// `app::overlay`'s unit test) instead of drawing it as if exact.
+#[test]
+fn a_noisy_reference_hessian_is_flagged_not_drawn_as_exact() {
+    let mut wb = workbench();
+    wb.method.ref_spp = 2;
+    wb.probe = Some(DVec2::new(0.1, -0.3));
+    wb.want_reference = true;
+    wb.overlays.set(Overlay::Extents, true);
+    let mut h = harness(wb);
+    step_until(&mut h, "probe and reference", |w| w.probe_done() && w.reference_done());
+    h.run_steps(2);
+    let r = h.state().readouts();
+    let reference = r.iter().find(|r| r.name == "reference").unwrap();
+    assert!(reference.hessian_is_noise(), "{:?}", reference.stderr);
+    h.get_by_label_contains("reference Hessian too noisy");
+}

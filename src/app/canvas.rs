@@ -184,7 +184,10 @@ impl Workbench {
             let r = xf.rect_of(self.doc.scene().domain_min, self.doc.scene().domain_max);
             let uv = Rect::from_min_max(pos2(0.0, 0.0), pos2(1.0, 1.0));
             painter.image(tex.id(), r, uv, Color32::WHITE);
-            n += 1 + overlay::paint(painter, rect, overlay::arrow_shapes(view, xf));
+            n += 1;
+            if self.gradient_arrows {
+                n += overlay::paint(painter, rect, overlay::arrow_shapes(view, xf));
+            }
             let c = pos2(rect.left() + 34.0, rect.bottom() - 34.0);
             n += overlay::paint(painter, rect, overlay::wheel_shapes(c, 22.0));
             let method = if self.gradient_aware { "aware" } else { "unaware" };

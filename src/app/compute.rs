@@ -43,6 +43,10 @@ pub struct MethodParams {
     /// Gradient overlay: grid points per side and directions per light field.
     pub grid: usize,
     pub grid_rays: usize,
+    /// Gradient overlay: after the `grid` level, refine by doubling up to the
+    /// field's resolution (one light field per pixel), each level complete before
+    /// it replaces the last.
+    pub grid_refine: bool,
 }
 
 impl Default for MethodParams {
@@ -56,6 +60,7 @@ impl Default for MethodParams {
             eps: 0.05,
             grid: 16,
             grid_rays: 256,
+            grid_refine: true,
         }
     }
 }
@@ -308,9 +313,24 @@ pub struct GradientGrid {
     pub points: Vec<GridPoint>,
 }
 
+/// The gradient overlay's levels: `n`, then doubling while below `n_max`, ending
+/// at `n_max` (the field's resolution) when it is larger than `n`.
+pub fn gradient_levels(n: usize, n_max: usize) -> Vec<usize> {
+    let mut v = vec![n.max(1)];
+    while *v.last().unwrap() < n_max {
+        let next = (2 * v.last().unwrap()).min(n_max);
+        v.push(next);
+    }
+    v
+}
+
+/// The gradient overlay, level after level (`gradient_levels(n, n_max)`): each the
+/// points and seeds of `volcache figure gradients --grid n`. The first level is
+/// sent row by row as it fills; finer ones only when complete, so the overlay
+/// never shows a partial finer level over a complete coarser one.
 pub fn spawn_gradients(
     scene: Arc<Scene>,
-    n: usize,
+    (n, n_max): (usize, usize),
     omega_o: DVec2,
     ps: ProbeSettings,
     seed: u64,
@@ -321,37 +341,44 @@ pub fn spawn_gradients(
         Priority::Background,
         notify,
         move |r: &Reporter<Arc<GradientGrid>>| {
-            let n = n.max(1);
-            let pts = grid_points(&scene, n);
-            r.stage(format!("gradient overlay: {n}×{n} light fields of {} rays", ps.rays));
-            r.progress().start(pts.len() as u64);
-            let cell = (scene.domain_max - scene.domain_min) / n as f64;
-            let mut done = Vec::with_capacity(pts.len());
-            let aw = AwareSettings::default();
-            for (k, &x) in pts.iter().enumerate() {
-                let mut p = GridPoint {
-                    at: x,
-                    aware: None,
-                    unaware: None,
-                };
-                if scene.medium_at(x).is_some() {
-                    // The points and seeds of `volcache figure gradients --grid n`.
-                    let out = Outgoing::Direction(omega_o);
-                    let shared =
-                        aware_and_unaware(&*scene, x, out, &ps, &aw, point_seed(seed, k, false), r.progress())?;
-                    r.add_rays(shared.light_field.cost_rays);
-                    p.aware = Some(shared.aware);
-                    p.unaware = Some(shared.unaware);
-                }
-                done.push(p);
-                r.progress().advance(1);
-                // A row at a time, so the overlay fills in as it goes.
-                if (k + 1) % n == 0 {
-                    r.send(Arc::new(GradientGrid {
-                        n,
-                        cell,
-                        points: done.clone(),
-                    }));
+            let levels = gradient_levels(n, n_max);
+            let count = levels.len();
+            for (level, &n) in levels.iter().enumerate() {
+                let pts = grid_points(&scene, n);
+                r.stage(format!(
+                    "gradient overlay {}/{count}: {n}×{n} light fields of {} rays",
+                    level + 1,
+                    ps.rays
+                ));
+                r.progress().start(pts.len() as u64);
+                let cell = (scene.domain_max - scene.domain_min) / n as f64;
+                let mut done = Vec::with_capacity(pts.len());
+                let aw = AwareSettings::default();
+                for (k, &x) in pts.iter().enumerate() {
+                    let mut p = GridPoint {
+                        at: x,
+                        aware: None,
+                        unaware: None,
+                    };
+                    if scene.medium_at(x).is_some() {
+                        // The points and seeds of `volcache figure gradients --grid n`.
+                        let out = Outgoing::Direction(omega_o);
+                        let shared =
+                            aware_and_unaware(&*scene, x, out, &ps, &aw, point_seed(seed, k, false), r.progress())?;
+                        r.add_rays(shared.light_field.cost_rays);
+                        p.aware = Some(shared.aware);
+                        p.unaware = Some(shared.unaware);
+                    }
+                    done.push(p);
+                    r.progress().advance(1);
+                    let row_done = (k + 1) % n == 0;
+                    if (level == 0 && row_done) || k + 1 == pts.len() {
+                        r.send(Arc::new(GradientGrid {
+                            n,
+                            cell,
+                            points: done.clone(),
+                        }));
+                    }
                 }
             }
             Result::<(), Cancelled>::Ok(())
@@ -363,6 +390,14 @@ pub fn spawn_gradients(
 mod tests {
     use super::*;
     use crate::app::jobs::no_notify;
+
+    #[test]
+    fn gradient_levels_double_up_to_the_fields_resolution() {
+        assert_eq!(gradient_levels(16, 16), vec![16]);
+        assert_eq!(gradient_levels(16, 256), vec![16, 32, 64, 128, 256]);
+        assert_eq!(gradient_levels(4, 24), vec![4, 8, 16, 24]);
+        assert_eq!(gradient_levels(0, 0), vec![1]);
+    }
 
     #[test]
     fn levels_go_coarse_to_fine_and_end_with_the_request() {

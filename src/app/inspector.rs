@@ -133,6 +133,13 @@ impl Workbench {
                     ui.end_row();
                 }
             });
+        if rows.iter().any(|r| r.hessian_is_noise()) {
+            ui.colored_label(
+                egui::Color32::from_rgb(255, 210, 120),
+                "reference Hessian too noisy (an eigenvalue's s.e. ≥ its size): its ellipse is dashed; \
+                 compute the reference with more samples",
+            );
+        }
         ui.weak(
             "unaware (Jarosz 2008) has no Hessian: its extent is the gradient circle R = εL/|∇L|. \
              A radius marked ↑ is held at the metric's r_max, ↓ at its r_min.",

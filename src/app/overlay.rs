@@ -21,6 +21,44 @@ mod tests {
     use super::*;
     use eframe::egui::pos2;
 
+    /// A reference whose Hessian eigenvalues are within their standard errors is
+    /// drawn dashed (many short segments), a converged one as one solid outline.
+    #[test]
+    fn a_noisy_reference_ellipse_is_dashed_and_a_converged_one_solid() {
+        use crate::app::readout::{MethodReadout, StdErrors};
+        use crate::core::metric::MetricParams;
+        use crate::core::taylor::Taylor2;
+        use crate::core::taylor_rgb::TaylorRgb;
+        let m = MetricParams::scene_relative(2.0, 0.05);
+        let h = glam::DMat2::from_cols(DVec2::new(-8.0, 0.0), DVec2::new(0.0, -2.0));
+        let parts = crate::core::taylor_rgb::PartDerivs {
+            single: TaylorRgb::tint(Taylor2::new(1.0, DVec2::ZERO, h), crate::core::color::Rgb::ONE),
+            ..Default::default()
+        };
+        let se = |l0: f64, l1: f64| StdErrors {
+            value: 0.01,
+            grad: DVec2::splat(0.01),
+            hess: [0.1; 3],
+            eigenvalues: DVec2::new(l0, l1),
+        };
+        let mut r = MethodReadout::new("reference", &parts, true, crate::flatland::scene_desc::Part::All, &m);
+        let xf = Xform::new(
+            Rect::from_min_max(pos2(0.0, 0.0), pos2(400.0, 400.0)),
+            DVec2::splat(-1.0),
+            DVec2::splat(1.0),
+            &Default::default(),
+        );
+        r.stderr = Some(se(0.4, 0.1));
+        assert!(!r.hessian_is_noise());
+        assert_eq!(extent_shapes(DVec2::ZERO, &[r.clone()], &xf).len(), 1);
+        r.stderr = Some(se(0.4, 2.5));
+        assert!(r.hessian_is_noise());
+        assert!(extent_shapes(DVec2::ZERO, &[r.clone()], &xf).len() > 10);
+        // Without batches (no standard errors) nothing is flagged.
+        r.stderr = None;
+        assert!(!r.hessian_is_noise());
+    }
+
     #[test]
     fn segments_are_clipped_to_the_view() {
         let r = Rect::from_min_max(pos2(0.0, 0.0), pos2(10.0, 10.0));
@@ -138,6 +176,8 @@ pub struct GradientView {
     pub image: ColorImage,
     pub arrows: Vec<(DVec2, DVec2)>,
     pub cell: DVec2,
+    /// Arrows are drawn on every `stride`-th cell.
+    pub stride: usize,
 }
 
 pub fn gradient_view(grid: &GradientGrid, aware: bool, part: Part) -> GradientView {
@@ -155,11 +195,14 @@ pub fn gradient_view(grid: &GradientGrid, aware: bool, part: Part) -> GradientVi
     let n = grid.n;
     let mut image = ColorImage::filled([n, n], Color32::TRANSPARENT);
     let mut arrows = Vec::with_capacity(samples.len());
+    let stride = arrow_stride(n);
     for (k, s) in &samples {
         // Grid points run row by row from the bottom.
         let (i, j) = (k % n, n - 1 - k / n);
         image.pixels[j * n + i] = rgb(gradient_color(s.grad, range), 170);
-        if s.grad.length() > 0.0 && s.grad.is_finite() {
+        let (gi, gj) = (k % n, k / n);
+        let marked = gi % stride == stride / 2 && gj % stride == stride / 2;
+        if (stride == 1 || marked) && s.grad.length() > 0.0 && s.grad.is_finite() {
             arrows.push((s.at, s.grad.normalize()));
         }
     }
@@ -167,12 +210,23 @@ pub fn gradient_view(grid: &GradientGrid, aware: bool, part: Part) -> GradientVi
         image,
         arrows,
         cell: grid.cell,
+        stride,
     }
 }
 
-/// An arrow per cell: a dark line through the cell centre with a triangular head.
+/// The most arrows drawn per side: a finer grid (up to one cell per pixel of the
+/// field) shows every [`arrow_stride`]-th cell's arrow, so they stay readable.
+pub const MAX_ARROWS_PER_SIDE: usize = 24;
+
+/// Which cells carry an arrow on an `n` × `n` grid: every k-th in each direction.
+pub fn arrow_stride(n: usize) -> usize {
+    n.div_ceil(MAX_ARROWS_PER_SIDE).max(1)
+}
+
+/// An arrow per cell (per [`arrow_stride`]-th cell on fine grids): a dark line
+/// through the cell centre with a triangular head.
 pub fn arrow_shapes(view: &GradientView, xf: &Xform) -> Vec<Shape> {
-    let half = 0.38 * view.cell.min_element();
+    let half = 0.38 * view.cell.min_element() * view.stride as f64;
     let ink = Color32::from_black_alpha(200);
     let mut shapes = Vec::with_capacity(2 * view.arrows.len());
     for &(at, d) in &view.arrows {
@@ -302,19 +356,26 @@ pub fn element_shapes(p: &ProbeResult, xf: &Xform, max_points: usize) -> Vec<Sha
     shapes
 }
 
-/// Each method's extent around the probe, in its colour.
+/// Each method's extent around the probe, in its colour; an extent whose Hessian
+/// is not known from its estimate ([`MethodReadout::hessian_is_noise`]: the
+/// reference with too few samples) is drawn dashed and faded, not as if exact.
 pub fn extent_shapes(at: DVec2, readouts: &[MethodReadout], xf: &Xform) -> Vec<Shape> {
-    readouts
-        .iter()
-        .filter(|r| r.is_finite())
-        .map(|r| {
-            let pts = extent_outline(at, &r.extent, 48)
-                .into_iter()
-                .map(|p| xf.to_screen(p))
-                .collect();
-            Shape::line(pts, Stroke::new(2.0, method_color(r.name)))
-        })
-        .collect()
+    let mut shapes = Vec::new();
+    for r in readouts.iter().filter(|r| r.is_finite()) {
+        let mut pts: Vec<_> = extent_outline(at, &r.extent, 48)
+            .into_iter()
+            .map(|p| xf.to_screen(p))
+            .collect();
+        let color = method_color(r.name);
+        if r.hessian_is_noise() {
+            pts.push(pts[0]);
+            let faded = Stroke::new(1.5, color.gamma_multiply(0.6));
+            shapes.extend(Shape::dashed_line(&pts, faded, 6.0, 5.0));
+        } else {
+            shapes.push(Shape::line(pts, Stroke::new(2.0, color)));
+        }
+    }
+    shapes
 }
 
 /// The shared colour scale of records coloured by `color` over every record list

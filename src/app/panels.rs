@@ -186,6 +186,11 @@ impl Workbench {
             ui.radio_value(&mut self.gradient_aware, true, "aware (ours)");
             ui.radio_value(&mut self.gradient_aware, false, "unaware (Jarosz 2008)");
         });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut self.gradient_arrows, "arrows");
+            ui.checkbox(&mut self.method.grid_refine, "refine to one cell per pixel")
+                .on_hover_text("after the gradient grid, double it up to the field's resolution");
+        });
         self.compare_section(ui);
     }
 

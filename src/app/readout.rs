@@ -107,6 +107,14 @@ impl MethodReadout {
         out
     }
 
+    /// The Hessian is not known from its estimate: some eigenvalue's standard error
+    /// is as large as the eigenvalue (the reference's batches disagree on its sign
+    /// or size), so its ellipse says little about the true extent.
+    pub fn hessian_is_noise(&self) -> bool {
+        self.stderr
+            .is_some_and(|e| (0..2).any(|k| !(e.eigenvalues[k] < self.eigenvalues[k].abs())))
+    }
+
     pub fn is_finite(&self) -> bool {
         self.lum.is_finite() && self.eigenvalues.is_finite() && self.extent.radii.is_finite()
     }

@@ -78,7 +78,7 @@ pub(super) struct ReferenceKey {
 #[derive(PartialEq)]
 pub(super) struct GradientKey {
     revision: u64,
-    n: usize,
+    n: (usize, usize),
     ps: ProbeSettings,
     seed: u64,
     omega_o_deg: f64,
@@ -92,6 +92,9 @@ pub struct Workbench {
     pub overlays: Overlays,
     /// The gradient overlay shows the aware method (else unaware).
     pub gradient_aware: bool,
+    /// The gradient overlay draws an arrow per cell (at most 24 per side) over
+    /// its angle-coded image.
+    pub gradient_arrows: bool,
     pub probe: Option<DVec2>,
     pub selection: Option<Selection>,
     /// The side panels are shown (the toolbar's toggles; small windows hide them).
@@ -160,6 +163,7 @@ impl Workbench {
             method: MethodParams::default(),
             overlays: Overlays::default(),
             gradient_aware: true,
+            gradient_arrows: true,
             probe: None,
             selection: None,
             show_controls: true,
@@ -435,7 +439,12 @@ impl Workbench {
 
         if self.overlays.is_on(Overlay::Gradients) {
             let ps = self.probe_settings(self.method.grid_rays);
-            let n = self.method.grid.clamp(1, 128);
+            let n0 = self.method.grid.clamp(1, 128);
+            let n_max = match self.method.grid_refine {
+                true => self.field_params.width.max(self.field_params.height).clamp(n0, 1024),
+                false => n0,
+            };
+            let n = (n0, n_max);
             let key = GradientKey {
                 revision: rev,
                 n,
