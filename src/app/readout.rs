@@ -112,7 +112,7 @@ impl MethodReadout {
     /// or size), so its ellipse says little about the true extent.
     pub fn hessian_is_noise(&self) -> bool {
         self.stderr
-            .is_some_and(|e| (0..2).any(|k| !(e.eigenvalues[k] < self.eigenvalues[k].abs())))
+            .is_some_and(|e| (0..2).any(|k| e.eigenvalues[k] >= self.eigenvalues[k].abs() || e.eigenvalues[k].is_nan()))
     }
 
     pub fn is_finite(&self) -> bool {
