@@ -365,3 +365,50 @@ fn a_noisy_reference_hessian_is_flagged_not_drawn_as_exact() {
     assert!(reference.hessian_is_noise(), "{:?}", reference.stderr);
     h.get_by_label_contains("reference Hessian too noisy");
 }
+
+/// The field from a radiance cache: switching the field method restarts the field
+/// job, the field is the library's cached reconstruction (`volcache caches`' function,
+/// same settings: pixels equal), and the records overlay draws the field's records
+/// without running a comparison.
+#[test]
+fn the_field_can_come_from_the_cache_with_its_records() {
+    use volcache::app::field_method::FieldMethod;
+    use volcache::flatland::cached_field::{CacheMethod, RecordMemo, render_cached};
+    let mut h = harness(workbench());
+    step_until(&mut h, "the path-traced field", |w| w.field_converged());
+    let starts = h.state().field_starts();
+    h.state_mut().field_method = FieldMethod::Cache(CacheMethod::Ours);
+    h.state_mut().overlays.set(Overlay::Records, true);
+    h.step();
+    assert_eq!(
+        h.state().field_starts(),
+        starts + 1,
+        "switching the method restarts the field"
+    );
+    step_until(&mut h, "the cached field", |w| w.field_converged());
+    h.run_steps(2);
+    let w = h.state();
+    let level = w.field_level().unwrap().clone();
+    assert!(!level.records.is_empty());
+    assert!(!w.compare_needed(), "the records come with the field");
+    assert!(
+        w.shapes_drawn >= level.records.len(),
+        "records drawn: {}",
+        w.shapes_drawn
+    );
+    let c = w.cache_field;
+    let cs = volcache::study::field_runs::cache_settings(CacheMethod::Ours, c.eps, &level.params, c.rays, c.steps);
+    let direct = render_cached(
+        w.doc.scene(),
+        &level.params,
+        &cs,
+        None,
+        &mut RecordMemo::new(),
+        &Default::default(),
+    )
+    .unwrap();
+    assert_eq!(direct.field.values, level.rendered.field.values);
+    assert_eq!(direct.record_count(), level.records.len());
+    let err = h.state_mut().field_command().unwrap_err().to_string();
+    assert!(err.contains("volcache caches"), "{err}");
+}

@@ -64,6 +64,12 @@ impl Workbench {
 
     /// The record overlay's shapes on the canvas (the overlay method's records).
     pub(super) fn record_overlay_shapes(&self, xf: &Xform) -> Vec<egui::Shape> {
+        if self.field_method != super::field_method::FieldMethod::PathTracing {
+            // The records the shown field was reconstructed from.
+            let Some(f) = self.field.current() else { return vec![] };
+            let scale = records_scale(&[&f.records], self.record_color);
+            return record_shapes(&f.records, self.record_color, scale.as_ref(), xf);
+        }
         let Some(res) = self.compare.current() else {
             return vec![];
         };

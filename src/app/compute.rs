@@ -84,6 +84,8 @@ pub struct FieldLevel {
     pub levels: usize,
     pub params: FieldParams,
     pub rendered: RenderedField,
+    /// The records the field was reconstructed from (empty when path traced).
+    pub records: Vec<crate::flatland::cached_field::RecordInfo>,
 }
 
 /// Coarse-to-fine levels ending with `p` itself: longest side 32 at ≤ 4 spp, then
@@ -130,6 +132,7 @@ pub fn spawn_field(scene: Arc<Scene>, params: FieldParams, notify: Notify) -> Jo
                     levels: n,
                     params: lp,
                     rendered,
+                    records: Vec::new(),
                 }));
             }
             Ok(())

@@ -9,6 +9,7 @@
 //!   [`edit`]: picking and dragging handles, adding and deleting items;
 //! - [`jobs`]: background jobs and the cancel-and-restart policy ([`jobs::Slot`]);
 //!   [`compute`]: what the jobs compute (field levels, probe, reference, gradients);
+//!   [`field_method`]: the field from a radiance cache instead of path tracing;
 //!   [`compare`]: the compare view's computation (reference and caches at equal
 //!   count), [`compare_view`]: its window and the record / error overlays' data;
 //! - [`workbench`]: state and per-frame scheduling; [`canvas`], [`overlay`],
@@ -35,6 +36,7 @@ pub mod compute;
 pub mod document;
 pub mod document3d;
 pub mod edit;
+pub mod field_method;
 pub mod frame_stats;
 pub mod inspector;
 pub mod inspector3d;

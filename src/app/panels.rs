@@ -186,6 +186,23 @@ impl Workbench {
             ui.radio_value(&mut self.gradient_aware, true, "aware (ours)");
             ui.radio_value(&mut self.gradient_aware, false, "unaware (Jarosz 2008)");
         });
+        ui.horizontal_wrapped(|ui| {
+            ui.label("field:");
+            for m in super::field_method::FieldMethod::ALL {
+                ui.radio_value(&mut self.field_method, m, m.label());
+            }
+        });
+        if self.field_method != super::field_method::FieldMethod::PathTracing {
+            ui.horizontal(|ui| {
+                let c = &mut self.cache_field;
+                let l = ui.label("cache ε");
+                ui.add(DragValue::new(&mut c.eps).range(1e-6..=10.0).speed(1e-3))
+                    .labelled_by(l.id);
+                let l = ui.label("rays");
+                ui.add(DragValue::new(&mut c.rays).range(3..=1 << 16)).labelled_by(l.id);
+            });
+            ui.weak("the records overlay shows the field's records");
+        }
         ui.horizontal(|ui| {
             ui.checkbox(&mut self.gradient_arrows, "arrows");
             ui.checkbox(&mut self.method.grid_refine, "refine to one cell per pixel")
@@ -211,6 +228,13 @@ impl Workbench {
 
     /// The `volcache field` line for the full-resolution field.
     pub fn field_command(&mut self) -> anyhow::Result<String> {
+        // A cached field is `volcache caches`' reconstruction, whose command also
+        // renders a reference; it is not offered as this field's command.
+        anyhow::ensure!(
+            self.field_method == super::field_method::FieldMethod::PathTracing,
+            "the field shown comes from a radiance cache: its command line is `volcache caches` \
+             (with a reference); switch the field to path tracing to copy `volcache field`"
+        );
         let scene = self.scene_arg()?;
         Ok(field_command(
             scene.as_deref(),

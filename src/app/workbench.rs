@@ -10,6 +10,7 @@ use super::compute::{
 };
 use super::document::Document;
 use super::edit::{Handle, Selection};
+use super::field_method::{CacheFieldParams, FieldMethod, spawn_cached_field};
 use super::jobs::{Notify, Slot, no_notify};
 use super::layout::{CONTROLS_WIDTH, INSPECTOR_WIDTH, panel_max_widths};
 use super::overlay::{Overlay, Overlays};
@@ -108,7 +109,10 @@ pub struct Workbench {
     /// Compute the reference at the probe (on demand), and keep doing so as it moves.
     pub want_reference: bool,
     pub auto_reference: bool,
-    pub(super) field: Slot<(u64, FieldParams), Arc<FieldLevel>>,
+    pub(super) field: Slot<(u64, FieldParams, FieldMethod, CacheFieldParams), Arc<FieldLevel>>,
+    /// How the canvas' field is computed: path traced, or from a radiance cache.
+    pub field_method: FieldMethod,
+    pub cache_field: CacheFieldParams,
     pub(super) probe_job: Slot<ProbeKey, Arc<ProbeResult>>,
     pub(super) reference: Slot<ReferenceKey, Arc<ReferenceResult>>,
     pub(super) gradients: Slot<GradientKey, Arc<GradientGrid>>,
@@ -174,6 +178,8 @@ impl Workbench {
             want_reference: false,
             auto_reference: false,
             field: Slot::default(),
+            field_method: FieldMethod::PathTracing,
+            cache_field: CacheFieldParams::default(),
             probe_job: Slot::default(),
             reference: Slot::default(),
             gradients: Slot::default(),
@@ -225,9 +231,12 @@ impl Workbench {
             && (!self.compare_needed() || self.compare_done())
     }
 
-    /// The compare view is open or an overlay shows its results.
+    /// The compare view is open or an overlay shows its results (the records
+    /// overlay shows the field's own records when the field comes from a cache).
     pub fn compare_needed(&self) -> bool {
-        self.show_compare || self.overlays.need_compare()
+        self.show_compare
+            || self.overlays.is_on(Overlay::ErrorMap)
+            || (self.overlays.is_on(Overlay::Records) && self.field_method == FieldMethod::PathTracing)
     }
 
     /// What the comparison is computed for now.
@@ -394,8 +403,11 @@ impl Workbench {
         let (seed, omega) = (self.field_params.seed, self.field_params.omega_o_deg);
         let notify = self.notify.clone();
         let fp = self.field_params.clone();
-        self.field
-            .ensure((rev, fp.clone()), || spawn_field(scene.clone(), fp, notify.clone()));
+        let (fm, cf) = (self.field_method, self.cache_field);
+        self.field.ensure((rev, fp.clone(), fm, cf), || match fm {
+            FieldMethod::PathTracing => spawn_field(scene.clone(), fp, notify.clone()),
+            FieldMethod::Cache(m) => spawn_cached_field(scene.clone(), fp, m, cf, notify.clone()),
+        });
 
         match self.probe {
             Some(at) => {
