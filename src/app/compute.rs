@@ -6,7 +6,6 @@
 //! `volcache figure gradients` ([`grid_points`], [`point_seed`]).
 
 use super::jobs::{Job, Notify, Priority, Reporter};
-use crate::core::color::{Rgb, luminance};
 use crate::core::space::D2;
 use crate::flatland::field::{FieldParams, RenderedField, render_field};
 use crate::flatland::scene::Scene;
@@ -163,23 +162,12 @@ pub struct ProbeResult {
 }
 
 fn incoming(scene: &Scene, lf: &LightField) -> Vec<Incoming> {
-    let t = |dir: DVec2, d: f64| {
-        scene
-            .medium
-            .as_ref()
-            .map_or(Rgb::ONE, |m| m.transmittance(lf.x, dir, d))
-    };
-    lf.rays
-        .iter()
-        .map(|r| Incoming {
+    let lum = crate::study::light_field_derivs::incoming_luminance(scene, lf);
+    (lf.rays.iter().zip(lum))
+        .map(|(r, (surface, medium))| Incoming {
             angle: r.dir.y.atan2(r.dir.x),
-            surface: r.hit.map_or(0.0, |h| luminance(h.radiance * t(r.dir, r.length))),
-            medium: r
-                .samples
-                .iter()
-                .enumerate()
-                .map(|(i, s)| luminance(*s * t(r.dir, lf.sample_depth(r, i))) * lf.step)
-                .sum(),
+            surface,
+            medium,
         })
         .collect()
 }

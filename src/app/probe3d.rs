@@ -8,7 +8,7 @@
 
 use super::jobs::{Job, Notify, Priority, Reporter};
 use super::render3d_job::View3dParams;
-use crate::core::color::{Rgb, luminance};
+use crate::core::color::Rgb;
 use crate::core::metric::{CacheMethod, MetricParams};
 use crate::core::space::D3;
 use crate::pipeline::derivatives::{AwareSettings, Derivatives, Method, ReferenceSettings};
@@ -133,23 +133,12 @@ pub struct Probe3dResult {
 }
 
 fn incoming(scene: &Scene, lf: &LightField<D3>) -> Vec<Incoming3> {
-    let t = |dir: DVec3, d: f64| {
-        scene
-            .medium
-            .as_ref()
-            .map_or(Rgb::ONE, |m| m.transmittance(lf.x, dir, d))
-    };
-    lf.rays
-        .iter()
-        .map(|r| Incoming3 {
+    let lum = crate::study::light_field_derivs::incoming_luminance(scene, lf);
+    (lf.rays.iter().zip(lum))
+        .map(|(r, (surface, medium))| Incoming3 {
             dir: r.dir,
-            surface: r.hit.map_or(0.0, |h| luminance(h.radiance * t(r.dir, r.length))),
-            medium: r
-                .samples
-                .iter()
-                .enumerate()
-                .map(|(i, s)| luminance(*s * t(r.dir, lf.sample_depth(r, i))) * lf.step)
-                .sum(),
+            surface,
+            medium,
         })
         .collect()
 }

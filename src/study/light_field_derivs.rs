@@ -5,6 +5,7 @@
 //! app's probe inspector and gradient overlay all compute them here.
 
 use super::seeds::reference_batch_seed;
+use crate::core::color::luminance;
 use crate::pipeline::derivatives::{self, AwareSettings, Derivatives, Method, PartDerivs, ReferenceSettings};
 use crate::pipeline::dim::Dim;
 use crate::pipeline::path::Settings;
@@ -56,6 +57,23 @@ pub fn aware_and_unaware<W: World>(
         aware_seconds,
         unaware_seconds,
     })
+}
+
+/// The luminance arriving at the light field's point along each of its rays, as
+/// the probe inspectors draw it: (from the surface the ray hits, from the medium
+/// along it, Σ T·L_s·Δt over its samples).
+pub fn incoming_luminance<W: World>(world: &W, lf: &LightField<W::S>) -> Vec<(f64, f64)> {
+    let t = |dir, d| world.transmittance(lf.x, dir, d);
+    lf.rays
+        .iter()
+        .map(|r| {
+            let surface = r.hit.map_or(0.0, |h| luminance(h.radiance * t(r.dir, r.length)));
+            let medium = (r.samples.iter().enumerate())
+                .map(|(i, s)| luminance(*s * t(r.dir, lf.sample_depth(r, i))) * lf.step)
+                .sum();
+            (surface, medium)
+        })
+        .collect()
 }
 
 /// One method at `x`, with its cost: aware or unaware on a light field of their
