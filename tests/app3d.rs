@@ -348,3 +348,18 @@ fn the_3d_compare_finishes_and_its_copied_command_reproduces_the_numbers() {
         }
     }
 }
+
+/// A probe placed by a click lies inside the fog when its ray crosses any: the
+/// middle of the ray's piece inside the medium, not halfway to the hit.
+#[test]
+fn a_clicked_probe_lands_in_the_fog() {
+    let path = room_file("infog");
+    let a = app(&path);
+    let w = a.volume.as_ref().unwrap();
+    let scene = w.doc.scene();
+    for (u, v) in [(0.5, 0.5), (0.1, 0.9), (0.9, 0.2)] {
+        let p = volcache::app::probe3d::Probe3d::at_pixel(scene, DVec2::new(u, v));
+        let x = p.point(scene);
+        assert!(scene.medium.as_ref().unwrap().contains(x), "({u}, {v}) → {x}");
+    }
+}

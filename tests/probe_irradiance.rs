@@ -279,7 +279,11 @@ fn bad_sensors_are_refused_naming_the_option() {
         (&s2, vec![SENSOR_2D, "--spp", "0"], vec!["--spp"]),
         (&s3, vec!["--at", "0,1"], vec!["--at 0,1", "expected 3 numbers"]),
         // (3D points take --method aware since the 3D probe; its options are checked.)
-        (&s3, vec!["--at", "0,0,1", "--method", "aware", "--rays", "2"], vec!["--rays"]),
+        (
+            &s3,
+            vec!["--at", "0,0,1", "--method", "aware", "--rays", "2"],
+            vec!["--rays"],
+        ),
         (
             &s3,
             vec!["--at", "0,0,1", "--omega-o", "3"],

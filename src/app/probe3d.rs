@@ -12,6 +12,7 @@ use crate::core::color::Rgb;
 use crate::core::metric::{CacheMethod, MetricParams};
 use crate::core::space::D3;
 use crate::pipeline::derivatives::{AwareSettings, Derivatives, Method, ReferenceSettings};
+use crate::pipeline::medium::Region;
 use crate::pipeline::path::Settings;
 use crate::pipeline::probe::{LightField, Outgoing, ProbeSettings};
 use crate::pipeline::record::CacheSettings;
@@ -45,10 +46,14 @@ pub struct Probe3dKey {
 }
 
 impl Probe3d {
-    /// A probe on the pixel at `pixel` (fractions), halfway to what its ray hits
-    /// (or to the scene's size when it hits nothing).
+    /// A probe on the pixel at `pixel` (fractions): in the middle of the ray's
+    /// piece inside the medium before what it hits, else halfway to the hit (or to
+    /// the scene's size when it hits nothing).
     pub fn at_pixel(scene: &Scene, pixel: DVec2) -> Self {
-        let depth = 0.5 * ray_length(scene, pixel);
+        let far = ray_length(scene, pixel);
+        let (o, d) = camera_ray(scene, pixel);
+        let piece = scene.medium.as_ref().and_then(|m| m.region.pieces(o, d, far));
+        let depth = piece.map_or(0.5 * far, |(t0, t1)| 0.5 * (t0 + t1));
         Probe3d {
             pixel,
             depth,

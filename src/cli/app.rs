@@ -30,7 +30,7 @@ pub struct AppArgs {
     #[arg(long)]
     pub width: Option<usize>,
     /// 3D scenes: place the probe on the camera ray through image point U,V
-    /// (fractions of the width and height, 0,0 top left), halfway to what it hits.
+    /// (fractions of the width and height, 0,0 top left), mid-way through the fog.
     #[arg(long, value_parser = parse_point)]
     pub pixel: Option<DVec2>,
     /// Write this file once everything asked for is computed (for scripts).
