@@ -186,3 +186,45 @@ fn caches_beat_path_tracing_at_equal_rays() {
         assert!(ec.rmse < ep.rmse, "{method:?}: cache {} vs pt {}", ec.rmse, ep.rmse);
     }
 }
+
+/// A point light shaded by a short wall in thick forward-scattering fog, a scene of
+/// our own like the one issue 16 measured: records extrapolating across the peak
+/// around the light went negative and were clamped to black pixels. A record
+/// whose expansion is negative at a pixel now contributes its lower-order
+/// estimate there, so no pixel with light around it comes out black.
+#[test]
+fn negative_extrapolations_leave_no_black_pixels() {
+    let scene = Scene::from_json(
+        r#"{ "domain": { "min": [-2, -2], "max": [2, 2] },
+             "segments": [ { "a": [-0.5, -0.3], "b": [0.5, -0.3], "reflectance": 0.3 } ],
+             "lights": [ { "type": "point", "position": [0, 0], "intensity": 1 } ],
+             "medium": { "sigma_a": 0.2, "sigma_s": 2, "g": 0.8, "region": "everywhere" },
+             "render": { "omega_o_deg": 90 } }"#,
+        "<shade>",
+    )
+    .unwrap();
+    let fp = params(&scene, 64, 64);
+    let reference = reference(&scene, &fp, 256);
+    let mut worst = (0, 0.0f64);
+    for (method, seed) in [
+        (CacheMethod::Ours, 1),
+        (CacheMethod::Ours, 2),
+        (CacheMethod::Jarosz08, 1),
+    ] {
+        let mut cs = settings(method, seed);
+        cs.eps = if method == CacheMethod::Ours { 1.0 } else { 0.1 };
+        let c = render_cached(&scene, &fp, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
+        let black = (c.field.values.iter().zip(&reference.values))
+            .filter(|(v, r)| v.max_element() <= 0.0 && r.min_element() > 0.0)
+            .count();
+        let e = field_errors(&c.field, &reference);
+        eprintln!(
+            "{method:?} seed {seed}: {} records, {black} black pixels, RMSE {:.4e} (mean {:.4e})",
+            c.record_count(),
+            e.rmse,
+            e.mean_reference
+        );
+        worst = (worst.0.max(black), worst.1.max(e.rmse / e.mean_reference));
+    }
+    assert_eq!(worst.0, 0, "black pixels");
+}

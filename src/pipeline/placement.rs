@@ -220,7 +220,80 @@ pub fn interpolate<W: World>(
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
-    cache
-        .interpolate_where(y, second_order, scratch, |x| sees(world, x, y, rays))
-        .map(|v| v.max(Rgb::ZERO))
+    cache.covering_where(y, scratch, |x| sees(world, x, y, rays));
+    let total: f64 = scratch.iter().map(|&(_, w)| w).sum();
+    if total <= 0.0 {
+        return None;
+    }
+    let records = cache.records();
+    let mut out = Rgb::ZERO;
+    for &(i, w) in scratch.iter() {
+        out += nonnegative_extrapolation(&records[i], y, second_order) * (w / total);
+    }
+    Some(out.max(Rgb::ZERO))
+}
+
+/// A record's value extrapolated to `y`, per channel: where its Taylor expansion
+/// goes negative it has left the region it describes (it extrapolates across a
+/// peak or an edge it was not fitted to), and the next lower order stands in —
+/// first order for second, the record's value for first. Radiance is never
+/// negative, and a negative term clamped to zero afterwards left isolated black
+/// pixels next to lights (issue 16: up to 47 in a shaded-light scene).
+fn nonnegative_extrapolation<S: crate::pipeline::dim::Dim>(
+    r: &crate::core::cache::Record<S, crate::core::taylor_rgb::TaylorRgb<S>>,
+    y: S::Vec,
+    second_order: bool,
+) -> Rgb {
+    use crate::core::cache::Interpolant;
+    let d = y - r.position;
+    let mut v = r.value.extrapolated(d, second_order);
+    if v.min_element() >= 0.0 {
+        return v;
+    }
+    let first = if second_order {
+        r.value.extrapolated(d, false)
+    } else {
+        v
+    };
+    let value = r.value.value();
+    for c in 0..3 {
+        if v[c] < 0.0 {
+            v[c] = if first[c] >= 0.0 { first[c] } else { value[c].max(0.0) };
+        }
+    }
+    v
+}
+
+#[cfg(test)]
+mod extrapolation_tests {
+    use super::nonnegative_extrapolation;
+    use crate::core::cache::Record;
+    use crate::core::color::Rgb;
+    use crate::core::metric::Extent;
+    use crate::core::space::D2;
+    use crate::core::taylor::Taylor2;
+    use crate::core::taylor_rgb::TaylorRgb;
+    use glam::{DMat2, DVec2};
+
+    /// Per channel: a positive expansion is kept as is; a negative second-order
+    /// term falls back to first order, a negative first order to the value.
+    #[test]
+    fn a_negative_expansion_falls_back_order_by_order() {
+        let red = Taylor2::new(1.0, DVec2::new(-0.5, 0.0), DMat2::ZERO);
+        let green = Taylor2::new(1.0, DVec2::new(-3.0, 0.0), DMat2::ZERO);
+        let blue = Taylor2::new(1.0, DVec2::ZERO, DMat2::from_diagonal(DVec2::splat(-10.0)));
+        let r = Record {
+            position: DVec2::ZERO,
+            value: TaylorRgb::<D2> {
+                channels: [red, green, blue],
+            },
+            extent: Extent::isotropic(1.0),
+            cost_rays: 0,
+        };
+        let y = DVec2::new(0.5, 0.0);
+        // Second order: red 0.75 kept; green 1 − 1.5 < 0 → value 1; blue 1 − 1.25 < 0 → first order 1.
+        assert_eq!(nonnegative_extrapolation(&r, y, true), Rgb::new(0.75, 1.0, 1.0));
+        assert_eq!(nonnegative_extrapolation(&r, y, false), Rgb::new(0.75, 1.0, 1.0));
+        assert_eq!(nonnegative_extrapolation(&r, DVec2::new(0.1, 0.0), true).x, 0.95);
+    }
 }
