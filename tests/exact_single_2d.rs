@@ -61,16 +61,17 @@ fn gradients_beside_an_emitter_in_thick_fog() {
 /// at 1e-4); then thick fog by treating a grazing piece of one plane as continuous
 /// rather than bridging and averaging its transmittance over its directions
 /// (`slide::transmittance_mean`; σ_t = 1, g = 0.6 was 0.9% at 1e-3, 41% at 1e-4,
-/// 4750× at 1e-8). Measured now (seeds 1, 2, 4096 rays), the worst per row:
-/// σ_t 1e-4: 0.33% (g 0) and 0.43% (g 0.99) down to 1e-5; σ_t 1, g 0.6: 0.56% down
-/// to 1e-4, 9.8% at 1e-5 … 1e-8; σ_t 1, g −0.99: 0.40% down to 1e-8; σ_t 20, g 0.9:
-/// 0.02% down to 1e-4, 11.9% at 1e-5 … 1e-8. (σ_t 1e-4 below 1e-5 is not yet held:
-/// 3.5% at 1e-6, 3.5× at 1e-8.)
+/// 4750× at 1e-8); then thin fog below 1e-5 by that mean for every element in a
+/// medium (the anchor's transmittance was 2.8% off at 1e-6, 3.9× at 1e-8). Measured
+/// now (seeds 1, 2, 4096 rays), the worst per row: σ_t 1e-4: 0.01% (g 0, g 0.99)
+/// down to 1e-8; σ_t 1, g 0.6: 0.9% down to 1e-4, 10.0% at 1e-5 … 1e-8; σ_t 1,
+/// g −0.99: 0.41% down to 1e-8; σ_t 20, g 0.9: 0.05% down to 1e-4, 12.2% at
+/// 1e-5 … 1e-8.
 #[test]
 fn gradients_next_to_an_emitter() {
     let rows: [(f64, f64, &[f64], f64); 7] = [
-        (1e-4, 0.0, &[1e-2, 1e-3, 1e-4, 1e-5], 0.02),
-        (1e-4, 0.99, &[1e-2, 1e-3, 1e-4, 1e-5], 0.02),
+        (1e-4, 0.0, &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8], 0.02),
+        (1e-4, 0.99, &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8], 0.02),
         (1.0, 0.6, &[1e-2, 1e-3, 1e-4], 0.02),
         (1.0, 0.6, &[1e-5, 1e-6, 1e-8], 0.25),
         (1.0, -0.99, &[1e-2, 1e-4, 1e-6, 1e-8], 0.02),

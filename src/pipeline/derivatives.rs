@@ -169,12 +169,9 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
         // a lobe narrower than the element (g → ±1) is then exact.
         if let Some(pw) = S::phase_weighted_form(lf.g, e.v, lf.x, lf.outgoing()) {
             let v = e.v.as_ref();
-            let spread = S::length(v[0] - lf.x) - S::length(v[1] - lf.x);
             let t = match e.far_plane {
                 Some(plane) => slide::vertex_rule(lf, e, plane, soft, false),
-                None if v.len() == 2 && lf.sigma_t.max_element() * spread.abs() > slide::VARYING_T => {
-                    slide::transmittance_mean(lf, v[0], v[1])
-                }
+                None if v.len() == 2 && lf.sigma_t.max_element() > 0.0 => slide::transmittance_mean(lf, v[0], v[1]),
                 None => transmittance_taylor_rgb::<S>(lf.sigma_t, lf.x, e.anchor, soft),
             };
             return TaylorRgb::tint(pw, e.radiance).mul_channels(times_sigma_s(t));
