@@ -4,17 +4,8 @@
 
 use std::process::Command;
 
-/// A foggy room of our own: a floor, a box, a point light, a box of fog (g = 0.4).
-const ROOM: &str = r#"{
-  "camera": {"position": [0, 1, 3], "look_at": [0, 0.8, 0], "fov_deg": 50},
-  "shapes": [
-    {"quad": {"origin": [-2, 0, -2], "u": [0, 0, 4], "v": [4, 0, 0]}, "reflectance": 0.6},
-    {"box": {"min": [-0.6, 0, -0.4], "max": [0.2, 1.2, -0.2]}, "reflectance": 0.5}
-  ],
-  "lights": [{"point": {"position": [0.3, 1.6, -1.0], "intensity": 3}}],
-  "medium": {"sigma_a": 0.05, "sigma_s": 0.6, "g": 0.4, "region": {"box": {"min": [-2, 0, -2], "max": [2, 2, 2]}}},
-  "render": {"resolution": [32, 24], "spp": 4, "seed": 3, "max_depth": 8}
-}"#;
+mod room3d;
+use room3d::ROOM;
 
 fn room() -> (tempfile::TempDir, String) {
     let dir = tempfile::tempdir().unwrap();

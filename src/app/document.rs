@@ -14,9 +14,6 @@ use crate::flatland::shipped::{embedded_name, embedded_source};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Undo steps kept.
-const UNDO_LIMIT: usize = 256;
-
 /// One undo or redo step: a scene and the file it belongs to.
 #[derive(Clone)]
 struct Snapshot {
@@ -32,13 +29,9 @@ pub struct Document {
     scene: Arc<Scene>,
     /// Where the scene was loaded from or saved to (None: embedded, never saved).
     path: Option<PathBuf>,
-    undo: Vec<Snapshot>,
-    redo: Vec<Snapshot>,
+    history: super::history::History<Snapshot>,
     /// Counts loads: restoring a step of another load switches the file back.
     loaded: u64,
-    /// Edits with the same key in a row (one drag, one slider gesture) make one
-    /// undo step; [`Document::end_gesture`] closes it.
-    gesture: Option<String>,
     /// Bumps on every change of the scene: jobs key on it.
     revision: u64,
     /// Bumps when a different scene is loaded, or undo/redo crosses a load (the app
@@ -53,10 +46,8 @@ impl Document {
         Document {
             scene: Arc::new(scene),
             path,
-            undo: Vec::new(),
-            redo: Vec::new(),
+            history: Default::default(),
             loaded: 0,
-            gesture: None,
             revision: 0,
             generation: 0,
             dirty: false,
@@ -126,11 +117,8 @@ impl Document {
     }
 
     fn push_undo(&mut self) {
-        self.undo.push(self.snapshot());
-        if self.undo.len() > UNDO_LIMIT {
-            self.undo.remove(0);
-        }
-        self.redo.clear();
+        let s = self.snapshot();
+        self.history.push(s);
     }
 
     /// Change the description with `f`. Refused (with the validation error) if the
@@ -143,10 +131,8 @@ impl Document {
             return Ok(false);
         }
         let scene = Scene::from_desc(desc, &self.scene.source)?;
-        if self.gesture.as_deref() != Some(key) {
-            self.push_undo();
-            self.gesture = Some(key.to_string());
-        }
+        let before = self.snapshot();
+        self.history.edit(key, || before);
         self.install(scene);
         self.dirty = true;
         Ok(true)
@@ -154,15 +140,15 @@ impl Document {
 
     /// The current gesture (drag, slider) ended: the next edit is a new undo step.
     pub fn end_gesture(&mut self) {
-        self.gesture = None;
+        self.history.end_gesture();
     }
 
     pub fn can_undo(&self) -> bool {
-        !self.undo.is_empty()
+        self.history.can_undo()
     }
 
     pub fn can_redo(&self) -> bool {
-        !self.redo.is_empty()
+        self.history.can_redo()
     }
 
     fn restore(&mut self, s: Snapshot) {
@@ -178,17 +164,19 @@ impl Document {
     }
 
     pub fn undo(&mut self) -> bool {
-        self.end_gesture();
-        let Some(prev) = self.undo.pop() else { return false };
-        self.redo.push(self.snapshot());
+        let now = self.snapshot();
+        let Some(prev) = self.history.undo(now) else {
+            return false;
+        };
         self.restore(prev);
         true
     }
 
     pub fn redo(&mut self) -> bool {
-        self.end_gesture();
-        let Some(next) = self.redo.pop() else { return false };
-        self.undo.push(self.snapshot());
+        let now = self.snapshot();
+        let Some(next) = self.history.redo(now) else {
+            return false;
+        };
         self.restore(next);
         true
     }

@@ -15,8 +15,6 @@ use crate::volume::scene_desc::{CameraDesc, SceneDesc};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-const UNDO_LIMIT: usize = 256;
-
 /// The scenes of `scenes3d/` that need no mesh file, embedded so that the 3D mode
 /// offers them wherever the app is started from; (file name, JSON).
 pub const SHIPPED_SCENES_3D: [(&str, &str); 3] = [
@@ -32,9 +30,7 @@ pub struct Document3d {
     base: PathBuf,
     /// The camera as loaded (what "Reset camera" restores).
     loaded_camera: CameraDesc,
-    undo: Vec<SceneDesc>,
-    redo: Vec<SceneDesc>,
-    gesture: Option<String>,
+    history: super::history::History<SceneDesc>,
     /// Bumps on every change of what is rendered (edits and camera moves).
     revision: u64,
     dirty: bool,
@@ -47,9 +43,7 @@ impl Document3d {
             scene: Arc::new(scene),
             path,
             base,
-            undo: Vec::new(),
-            redo: Vec::new(),
-            gesture: None,
+            history: Default::default(),
             revision: 0,
             dirty: false,
         }
@@ -127,29 +121,22 @@ impl Document3d {
             return Ok(false);
         }
         let scene = self.rebuild(desc)?;
-        if self.gesture.as_deref() != Some(key) {
-            self.undo.push(self.scene.desc.clone());
-            if self.undo.len() > UNDO_LIMIT {
-                self.undo.remove(0);
-            }
-            self.redo.clear();
-            self.gesture = Some(key.to_string());
-        }
+        self.history.edit(key, || self.scene.desc.clone());
         self.install(scene);
         self.dirty = true;
         Ok(true)
     }
 
     pub fn end_gesture(&mut self) {
-        self.gesture = None;
+        self.history.end_gesture();
     }
 
     pub fn can_undo(&self) -> bool {
-        !self.undo.is_empty()
+        self.history.can_undo()
     }
 
     pub fn can_redo(&self) -> bool {
-        !self.redo.is_empty()
+        self.history.can_redo()
     }
 
     /// Restore a stored description, keeping the current camera (the camera is
@@ -162,17 +149,17 @@ impl Document3d {
     }
 
     pub fn undo(&mut self) -> bool {
-        self.end_gesture();
-        let Some(prev) = self.undo.pop() else { return false };
-        self.redo.push(self.scene.desc.clone());
+        let Some(prev) = self.history.undo(self.scene.desc.clone()) else {
+            return false;
+        };
         self.restore(prev);
         true
     }
 
     pub fn redo(&mut self) -> bool {
-        self.end_gesture();
-        let Some(next) = self.redo.pop() else { return false };
-        self.undo.push(self.scene.desc.clone());
+        let Some(next) = self.history.redo(self.scene.desc.clone()) else {
+            return false;
+        };
         self.restore(next);
         true
     }

@@ -4,7 +4,7 @@
 //! functions the command line calls, on background threads ([`jobs`]), and the
 //! state logic (scene edits, undo, scheduling) lives apart from the widgets.
 //!
-//! - [`document`]: the edited scene, validation, undo/redo, load/save;
+//! - [`document`]: the edited scene, validation, undo/redo ([`history`]), load/save;
 //!   [`open_dialog`], [`open_window`]: "Open…" (shipped scenes, a file browser);
 //!   [`edit`]: picking and dragging handles, adding and deleting items;
 //! - [`jobs`]: background jobs and the cancel-and-restart policy ([`jobs::Slot`]);
@@ -38,6 +38,7 @@ pub mod document3d;
 pub mod edit;
 pub mod field_method;
 pub mod frame_stats;
+pub mod history;
 pub mod inspector;
 pub mod inspector3d;
 pub mod jobs;
