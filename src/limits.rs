@@ -64,6 +64,10 @@ pub const MAX_EXPOSURE: f64 = 100.0;
 pub const FD_STEP: (f64, f64) = (1e-9, 0.5);
 /// Near-field clamp of medium elements, in march steps (`probe --medium-clamp`).
 pub const MEDIUM_CLAMP: (f64, f64) = (1e-6, 1e6);
+/// Refinement k of the probes' march (`--grading`): 0 (even steps) or up to 30
+/// (first step k/(e^k − 1) ≈ 3·10⁻¹² of the even one; beyond, e^k overflows the
+/// useful range of depths).
+pub const GRADING: (f64, f64) = (0.0, 30.0);
 /// Error threshold ε of the caches (`--eps`).
 pub const EPS: (f64, f64) = (0.0, 1e30);
 

@@ -36,6 +36,10 @@ pub struct CacheArgs {
     /// Ray-marched medium samples per direction.
     #[arg(long, default_value_t = 16)]
     pub steps: usize,
+    /// Refinement of the march towards x: 0 spaces the samples evenly, k > 0 makes
+    /// the first steps k/(e^k − 1) of the even step (see `pipeline::probe::March`).
+    #[arg(long, default_value_t = volcache::pipeline::probe::DEFAULT_GRADING)]
+    pub grading: f64,
     /// Separate caches for single and multiple scattering.
     #[arg(long)]
     pub per_part: bool,
@@ -86,6 +90,7 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
 /// The options' cache settings (`fp.seed` is `--seed`, see [`field_params`]).
 pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
     let mut cs = field_runs::cache_settings(method, a.eps.unwrap_or(0.05), fp, a.rays, a.steps);
+    cs.probe.grading = a.grading;
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
     cs
@@ -152,6 +157,7 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
     }
     check_count("--rays", a.rays as u64, 1 << 20)?;
     check_count("--steps", a.steps as u64, 4096)?;
+    check_range("--grading", a.grading, limits::GRADING)?;
     check_spp("--ref-spp", a.ref_spp, limits::MAX_SPP)?;
     ensure_memory(fp.width * fp.height, CACHES_BYTES_PER_PIXEL, "the field")
 }

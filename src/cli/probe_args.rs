@@ -78,6 +78,10 @@ pub struct ProbeArgs {
     /// Ray-marched medium samples per ray (aware, unaware).
     #[arg(long, default_value_t = 24)]
     pub steps: usize,
+    /// Refinement of the march towards x: 0 spaces the samples evenly, k > 0 makes
+    /// the first steps k/(e^k − 1) of the even step (see `pipeline::probe::March`).
+    #[arg(long, default_value_t = volcache::pipeline::probe::DEFAULT_GRADING)]
+    pub grading: f64,
     /// Finite-difference step as a fraction of the scene size (reference).
     #[arg(long, default_value_t = 1e-2)]
     pub fd_step: f64,

@@ -32,6 +32,10 @@ pub struct Cache3dArgs {
     /// Ray-marched medium samples per direction.
     #[arg(long, default_value_t = 24)]
     pub steps: usize,
+    /// Refinement of the march towards x: 0 spaces the samples evenly, k > 0 makes
+    /// the first steps k/(e^k − 1) of the even step (see `pipeline::probe::March`).
+    #[arg(long, default_value_t = volcache::pipeline::probe::DEFAULT_GRADING)]
+    pub grading: f64,
     /// Recursive paths per probe hit and per medium sample.
     #[arg(long, default_value_t = 1)]
     pub paths: u32,
@@ -78,6 +82,10 @@ impl Cache3dArgs {
             "--rays must be between 4 and 1048576"
         );
         anyhow::ensure!((1..=4096).contains(&self.steps), "--steps must be between 1 and 4096");
+        anyhow::ensure!(
+            (0.0..=30.0).contains(&self.grading),
+            "--grading must be between 0 and 30"
+        );
         anyhow::ensure!((1..=1024).contains(&self.paths), "--paths must be between 1 and 1024");
         anyhow::ensure!(
             (1..=1024).contains(&self.surface_paths),
@@ -102,6 +110,7 @@ impl Cache3dArgs {
         let mut cs = CacheSettings::new::<volcache::core::space::D3>(method, eps, image.settings);
         cs.probe.rays = self.rays;
         cs.probe.steps = self.steps;
+        cs.probe.grading = self.grading;
         cs.probe.paths = self.paths;
         cs.second_order = self.second_order;
         cs.seed = self.cache_seed;

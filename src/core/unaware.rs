@@ -4,7 +4,8 @@
 //! The ray's direction and its samples' relative positions along it are fixed; a
 //! ray ending on a surface has its end point slide on the surface's tangent plane,
 //! so only the distance s to it changes, ∇s = −n/(n·ω), and with it the
-//! transmittance. Medium samples sit at fixed fractions u of s with thickness Δu·s.
+//! transmittance. Medium samples sit at fixed fractions u of s with thickness
+//! ∝ s (each Δt_i/s fixed).
 //! The measure and visibility are treated as constant.
 
 use super::color::Rgb;
@@ -31,10 +32,8 @@ pub struct UnawareRay<'a, S: Space> {
     pub length: f64,
     /// Radiance arriving from the ray's end (surface or sky).
     pub end_radiance: Rgb,
-    /// L_s of the medium samples, with their depths.
-    pub samples: &'a [(f64, Rgb)],
-    /// March step Δt.
-    pub step: f64,
+    /// The medium samples: depth, L_s and thickness Δt.
+    pub samples: &'a [(f64, Rgb, f64)],
 }
 
 impl<S: Space> UnawareRay<'_, S> {
@@ -49,17 +48,17 @@ impl<S: Space> UnawareRay<'_, S> {
             }
         }
         let slides = S::dot(self.grad_s, self.grad_s) > 0.0;
-        for &(t_i, l) in self.samples {
+        for &(t_i, l, dt) in self.samples {
             if l == Rgb::ZERO {
                 continue;
             }
             for (c, acc) in multiple.iter_mut().enumerate() {
                 let sig = self.sigma_t[c];
                 let tr = (-sig * t_i).exp();
-                let v = self.weight[c] * tr * l[c] * self.step;
+                let v = self.weight[c] * tr * l[c] * dt;
                 // d/ds [T(u s) L Δu s] = T L Δu (1 − σ u s), with u s = t_i.
                 let ds = if slides {
-                    self.weight[c] * tr * l[c] * (self.step / self.length) * (1.0 - sig * t_i)
+                    self.weight[c] * tr * l[c] * (dt / self.length) * (1.0 - sig * t_i)
                 } else {
                     0.0
                 };

@@ -17,7 +17,7 @@ use super::slide;
 use super::world::{DirectLight, World};
 use crate::core::color::Rgb;
 use crate::core::distance::distance;
-use crate::core::element::{medium_form_factor_smoothed, near_distance};
+use crate::core::element::{medium_form_factor_smoothed, medium_softening, near_distance};
 use crate::core::phase::{phase_taylor_fixed_direction, phase_taylor_out};
 use crate::core::space::Space;
 use crate::core::taylor::Taylor2;
@@ -125,11 +125,11 @@ pub fn direct_derivatives<S: Dim>(lf: &LightField<S>) -> TaylorRgb<S> {
     sum
 }
 
-/// The light an element sends to x, T L F (no phase, no σ_s), with derivatives.
-pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp: f64) -> TaylorRgb<S> {
-    let x = lf.x;
+/// The light a surface element or a bridging medium element outside the near field
+/// sends to x, T L F (no phase, no σ_s), with derivatives. (Other medium elements:
+/// [`medium_shell_contribution`].)
+pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>) -> TaylorRgb<S> {
     let soft = near_distance(e.size());
-    let clamp = medium_clamp * lf.step;
     let form = match e.kind {
         // Surfaces: the angle (solid angle), unclamped. Every vertex is a ray's end
         // or a silhouette, never nearer than the nearest surface, and the elements'
@@ -137,26 +137,13 @@ pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp
         // alike in both; a clamp scaled by each element's size broke that next to
         // surfaces (a long silhouette element clamped a near vertex its short
         // neighbour did not: gradient 26× off at 1e-5 from an emitter).
-        ElementKind::Surface => S::form_factor_clamped(e.v, x, 0.0),
-        // Shell pieces bridging an occluder's edge: the angle (solid angle), times
-        // the thickness Δt carried in a medium piece's radiance.
-        // Its near field is bounded at the march resolution: within medium_clamp·Δt
-        // of x (where the form factor's derivatives grow like 1/distance to an edge)
-        // it is treated as an ordinary shell piece.
-        ElementKind::Medium if e.bridging && e.v.as_ref().iter().all(|&p| S::length(p - x) >= clamp) => {
-            S::form_factor(e.v, x)
-        }
-        // An ordinary shell piece: a fixed measure A = Ω_dir r_anchor^{d−1} Δt with
-        // form factor A/r^{d−1}, smoothed at the march resolution (the angle form
-        // would make the gradient's noise grow like √N: its derivative is per vertex,
-        // not per angle). Its radiance carries Δt.
-        ElementKind::Medium => {
-            let r = S::length(e.anchor - x);
-            let measure = e.dir_measure * r.powi(S::DIM as i32 - 1) * lf.step;
-            medium_form_factor_smoothed::<S>(e.anchor, measure, x, clamp) * (1.0 / lf.step)
-        }
+        ElementKind::Surface => S::form_factor_clamped(e.v, lf.x, 0.0),
+        // Shell pieces bridging an occluder's edge, beyond medium_clamp·Δt of x:
+        // the angle (solid angle), times the thickness Δt carried in a medium
+        // piece's radiance.
+        ElementKind::Medium => S::form_factor(e.v, lf.x),
     };
-    TaylorRgb::tint(form, e.radiance).mul_channels(transmittance_taylor_rgb::<S>(lf.sigma_t, x, e.anchor, soft))
+    TaylorRgb::tint(form, e.radiance).mul_channels(transmittance_taylor_rgb::<S>(lf.sigma_t, lf.x, e.anchor, soft))
 }
 
 /// One proxy element's contribution σ_s f T L F with its derivatives.
@@ -183,8 +170,167 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
             return TaylorRgb::tint(S::form_factor_clamped(e.v, lf.x, 0.0), e.radiance).mul_channels(times_sigma_s(ft));
         }
     }
+    if let Some(c) = medium_shell_contribution(lf, e, medium_clamp) {
+        return c.mul_channels(times_sigma_s([Taylor2::constant(1.0); 3]));
+    }
     let phase = phase_taylor_out::<S>(lf.g, lf.x, e.anchor, lf.outgoing(), soft);
-    element_incident(lf, e, medium_clamp).mul_channels(times_sigma_s([phase; 3]))
+    element_incident(lf, e).mul_channels(times_sigma_s([phase; 3]))
+}
+
+/// The phase towards `c` softened at a = 2ε within a of x, exact beyond 2a, and
+/// blended smoothly (C², quintic smootherstep in the distance) in between.
+/// Softening it everywhere bent a strong lobe far away (at g = 0.9 a lobe softened
+/// at ε is ≈ 10× lower at 3ε), and the shells' flux at the walls then missed the
+/// surfaces' exact one. The radius was measured in a furnace at g = ±0.9 (4 seeds,
+/// 3 points per dimension): a = ε left the Hessians 3× noisier, a = 4ε bent the
+/// lobe at walls 0.4 away (a false gradient of 0.6·L_s per unit length).
+fn near_field_phase<S: Dim>(lf: &LightField<S>, c: S::Vec, soft: f64, eps: f64) -> Taylor2<S> {
+    let x = lf.x;
+    let a = 2.0 * eps;
+    let r = S::length(c - x);
+    let exact = || phase_taylor_out::<S>(lf.g, x, c, lf.outgoing(), soft);
+    let smooth = || phase_taylor_out::<S>(lf.g, x, c, lf.outgoing(), a.max(soft));
+    if lf.g == 0.0 || r >= 2.0 * a {
+        return exact();
+    }
+    if r <= a {
+        return smooth();
+    }
+    // w = smootherstep((r − a)/a): 0 at a, 1 at 2a, with zero first and second
+    // derivatives at both ends.
+    let s = (r - a) / a;
+    let w = s * s * s * (10.0 + s * (-15.0 + 6.0 * s));
+    let dw = 30.0 * s * s * (1.0 - s) * (1.0 - s) / a;
+    let d2w = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / (a * a);
+    let w = distance::<S>(x, c, 0.0).compose(w, dw, d2w);
+    let (e, m) = (exact(), smooth());
+    m + w * (e - m)
+}
+
+/// An ordinary shell piece's f·T·L·F (no σ_s) — `None` for surfaces and for
+/// bridging pieces outside the near field.
+///
+/// Its derivatives are those of one kernel smoothed at the march resolution ε,
+/// phase included: f_ε·T·m/r_ε^{d−1} with r_ε = √(r² + ε²) and f_ε the phase
+/// softened near x ([`near_field_phase`]).
+/// Summed over the shells around x, the exact kernel's gradient is only a principal
+/// value: the ball of radius ε around x leaves the term −L(x)∫f(ω)ω dω (the phase's
+/// mean cosine, ∝ g along ω_o) that the smoothed form factor alone did not cancel.
+/// In a furnace (L_s constant) at g = 0.6 that was a false gradient ≈ g·L_s; the
+/// smoothed kernel is integrable with its derivatives, so the shells' sum tends to
+/// the true one. The value stays the exact f·T·F.
+fn medium_shell_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp: f64) -> Option<TaylorRgb<S>> {
+    if e.kind != ElementKind::Medium {
+        return None;
+    }
+    let x = lf.x;
+    let nearest =
+        e.v.as_ref()
+            .iter()
+            .map(|&p| S::length(p - x))
+            .fold(f64::INFINITY, f64::min);
+    if e.bridging && nearest >= medium_clamp * lf.march.thickness_at(nearest) {
+        return None;
+    }
+    // A piece is its samples, each with 1/d of its measure: each ray's samples are
+    // jittered uniformly along it, so their sum integrates any kernel without bias
+    // (a piece's centroid is not uniformly jittered: the mean of d offsets).
+    let soft = near_distance(e.size());
+    if e.bridging {
+        return Some(medium_point(
+            lf,
+            e.anchor,
+            e.dir_measure,
+            e.radiance,
+            soft,
+            medium_clamp,
+        ));
+    }
+    let samples = e.samples.as_ref();
+    let share = e.dir_measure / samples.len() as f64;
+    let mut sum = TaylorRgb::<S>::default();
+    for &(p, radiance) in samples.iter().filter(|s| s.1 != Rgb::ZERO) {
+        sum += medium_point(lf, p, share, radiance, soft, medium_clamp);
+    }
+    Some(sum)
+}
+
+/// One medium point's f·T·L·F (no σ_s; `radiance` carries its thickness Δt), with
+/// the exact value, the gradient of the kernel smoothed at ε = medium_clamp × the
+/// march's first step, and the Hessian of the kernel smoothed at medium_clamp × its
+/// even step. Each scale is one constant per light field, so that each is the
+/// derivative of one kernel (a scale following the local Δt is not: its own
+/// derivative is missing, and at k = 6 the phase's mean-cosine term came back,
+/// 1.5·L_s along ω_o in a furnace at g = 0.6).
+///
+/// Why two scales: with the march refined towards x ([`super::probe::March`]), the
+/// gradient's kernel (∝ 1/r^d, log-singular over a sharp feature) wants the fine
+/// steps there, while the Hessian's (∝ 1/r^{d+1}) only turns them into noise:
+/// ‖H‖/L_s 150–3700 in a furnace (zero) at k = 6–9, against 0.2–0.6 when smoothed at
+/// the even step as before.
+fn medium_point<S: Dim>(
+    lf: &LightField<S>,
+    p: S::Vec,
+    dir_measure: f64,
+    radiance: Rgb,
+    soft: f64,
+    medium_clamp: f64,
+) -> TaylorRgb<S> {
+    let x = lf.x;
+    let r = S::length(p - x);
+    let t = transmittance_taylor_rgb::<S>(lf.sigma_t, x, p, soft);
+    let local = lf.march.thickness_at(r);
+    let kernel = |scale: f64| {
+        TaylorRgb::tint(
+            smoothed_kernel(lf, p, dir_measure, soft, local, medium_clamp * scale),
+            radiance,
+        )
+        .mul_channels(t)
+    };
+    let (fine, even) = (lf.march.thickness_at(0.0), lf.march.even_step());
+    let mut c = kernel(fine);
+    // Beyond HESSIAN_SCALE_REACH smoothing lengths the two kernels' Hessians differ
+    // by < 0.1% ((ε/r)²; the phase is exact beyond 4ε): one evaluation is enough.
+    if even > fine && r < HESSIAN_SCALE_REACH * medium_clamp * even {
+        for (ch, h) in c.channels.iter_mut().zip(kernel(even).channels) {
+            ch.hess = h.hess;
+        }
+    }
+    // The exact value.
+    let exact = dir_measure * phase_taylor_out::<S>(lf.g, x, p, lf.outgoing(), soft).value;
+    for (ch, (tc, rad)) in c
+        .channels
+        .iter_mut()
+        .zip(t.iter().zip([radiance.x, radiance.y, radiance.z]))
+    {
+        ch.value = exact * tc.value * rad;
+    }
+    c
+}
+
+/// See [`medium_point`].
+const HESSIAN_SCALE_REACH: f64 = 32.0;
+
+/// f_ε·F_ε/Δt of a medium point of thickness Δt (F = Ω r^{d−1} Δt / r_ε^{d−1}),
+/// smoothed at ε = `smoothing` (or the piece's own size), value included.
+fn smoothed_kernel<S: Dim>(
+    lf: &LightField<S>,
+    p: S::Vec,
+    dir_measure: f64,
+    soft: f64,
+    step: f64,
+    smoothing: f64,
+) -> Taylor2<S> {
+    let x = lf.x;
+    let r = S::length(p - x);
+    let n = S::DIM as i32 - 1;
+    let measure = dir_measure * r.powi(n) * step;
+    let eps = smoothing.max(medium_softening::<S>(measure));
+    let form = Taylor2 {
+        value: measure / (r * r + eps * eps).powf(0.5 * n as f64),
+        ..medium_form_factor_smoothed::<S>(p, measure, x, smoothing)
+    };
+    form * near_field_phase(lf, p, soft, eps) * (1.0 / step)
 }
 
 /// Elements summed per parallel task: the partial sums are added in a fixed order,
@@ -232,7 +378,12 @@ pub fn unaware<S: Dim>(lf: &LightField<S>) -> PartDerivs<S> {
     let mut samples = Vec::new();
     for r in &lf.rays {
         samples.clear();
-        samples.extend(r.samples.iter().enumerate().map(|(i, l)| (lf.sample_depth(r, i), *l)));
+        samples.extend(
+            r.samples
+                .iter()
+                .enumerate()
+                .map(|(i, l)| (lf.sample_depth(r, i), *l, lf.sample_thickness(r, i))),
+        );
         let f = phase_taylor_fixed_direction::<S>(lf.g, lf.x, r.dir, out);
         UnawareRay::<S> {
             sigma_t: lf.sigma_t,
@@ -242,7 +393,6 @@ pub fn unaware<S: Dim>(lf: &LightField<S>) -> PartDerivs<S> {
             length: r.length,
             end_radiance: r.hit.map_or(r.escaped, |h| h.radiance),
             samples: &samples,
-            step: lf.step,
         }
         .accumulate(&mut single, &mut multiple);
     }

@@ -71,6 +71,9 @@ pub struct Element<S: Dim> {
     /// tangent plane (a point on it, its normal), onto which the near vertices slide
     /// as x moves ([`super::slide`]).
     pub far_plane: Option<(S::Vec, S::Vec)>,
+    /// Each vertex's own sample: where it is evaluated and its radiance (for medium
+    /// elements L_s·Δt of that sample, zero where the ray ended before the shell).
+    pub samples: S::Simplex<(S::Vec, Rgb)>,
 }
 
 impl<S: Dim> crate::core::metric::Radiant for Element<S> {
@@ -123,6 +126,7 @@ fn make<S: Dim>(
         bridging,
         dir_measure,
         far_plane: None,
+        samples: S::simplex(|k| (v[k].3, v[k].2)),
     }
 }
 
@@ -228,7 +232,7 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
                 if present.as_ref()[k] {
                     let d = lf.sample_depth(r, i);
                     let p = x + r.dir * d;
-                    (p, d, r.samples[i] * lf.step, p)
+                    (p, d, r.samples[i] * lf.sample_thickness(r, i), p)
                 } else {
                     let e = ends[t.as_ref()[k] as usize];
                     (e.0, e.1, Rgb::ZERO, e.3)

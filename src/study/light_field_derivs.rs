@@ -69,7 +69,7 @@ pub fn incoming_luminance<W: World>(world: &W, lf: &LightField<W::S>) -> Vec<(f6
         .map(|r| {
             let surface = r.hit.map_or(0.0, |h| luminance(h.radiance * t(r.dir, r.length)));
             let medium = (r.samples.iter().enumerate())
-                .map(|(i, s)| luminance(*s * t(r.dir, lf.sample_depth(r, i))) * lf.step)
+                .map(|(i, s)| luminance(*s * t(r.dir, lf.sample_depth(r, i))) * lf.sample_thickness(r, i))
                 .sum();
             (surface, medium)
         })

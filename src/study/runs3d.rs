@@ -177,7 +177,8 @@ mod tests {
         )
         .unwrap();
         let mut cs = CacheSettings::new::<crate::core::space::D3>(CacheMethod::Ours, 1.0, image.settings);
-        (cs.probe.rays, cs.probe.steps) = (64, 2);
+        // A plumbing test: two even steps (a graded march needs more than two).
+        (cs.probe.rays, cs.probe.steps, cs.probe.grading) = (64, 2, 0.0);
         let cp = CachedRenderParams {
             image: image.clone(),
             ..CachedRenderParams::from_scene(&scene)
