@@ -44,9 +44,12 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
 /// Near occlusion boundaries (penumbrae of the occluder, the windows' frames, the
 /// stairs), the aware single-scattering derivatives (light from surfaces, where
 /// occlusion changes live) are far closer to the reference than the unaware ones,
-/// and within stated bounds. The multiple-scattering part is reported, not bounded
-/// (see the issue note: its derivatives from noisy ray-marched samples are the weak
-/// spot of the proxy).
+/// and within stated bounds. The multiple-scattering gradient too, since the shells'
+/// smoothed kernel and the graded march (`pipeline::probe::March`): measured over
+/// aware seeds 5–8 against the mean of two 40k-spp references, median vector error
+/// 0.137–0.182 (0.56 with an even march and the exact kernel), max 0.26–0.34, and
+/// cos(aware, reference) ≥ 0.978 at every point (the reference's own seed-to-seed
+/// spread is 0.01–0.2 of its length).
 #[test]
 fn aware_beats_unaware_near_occlusion_boundaries() {
     let cases = [
@@ -101,6 +104,11 @@ fn aware_beats_unaware_near_occlusion_boundaries() {
             unaware_err.push(rel(u.grad, r.grad));
             hess_err.push(h);
             multi_err.push(rel(am.grad, rm.grad));
+            let cos = am.grad.dot(rm.grad) / (am.grad.length() * rm.grad.length());
+            assert!(
+                cos > 0.9,
+                "{path} {x}: multiple-scattering gradient points elsewhere (cos {cos})"
+            );
         }
     }
     let a_med = percentile(&mut aware_err.clone(), 0.5);
@@ -118,6 +126,7 @@ fn aware_beats_unaware_near_occlusion_boundaries() {
     assert!(a_med < 0.15, "aware median relative gradient error {a_med}");
     assert!(a_90 < 0.4, "aware p90 relative gradient error {a_90}");
     assert!(h_med < 0.5, "aware median Hessian error {h_med}");
+    assert!(m_med < 0.25, "aware median multiple-scattering gradient error {m_med}");
 }
 
 /// More directions, smaller error against the exact single scattering

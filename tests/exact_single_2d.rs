@@ -17,7 +17,7 @@ fn gradient_errors(scene: &Scene, x: DVec2, omega_o: DVec2, seeds: u64) -> Vec<f
         .map(|seed| {
             // The single part needs no deep paths: at albedo 1 and σ_t 50 they
             // would cost minutes.
-            let mut ps = ProbeSettings::with_rays(4096);
+            let mut ps = ProbeSettings::with_rays::<volcache::core::space::D2>(4096);
             ps.settings.max_depth = 2;
             let lf = capture(scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, &Progress::new()).unwrap();
             let aw = AwareSettings::default();
@@ -90,7 +90,7 @@ fn gradients_next_to_an_emitter() {
             let omega_o = DVec2::new(0.6, 0.8);
             let exact = exact2d::derivatives(&scene, x, omega_o, d * 1e-2).luminance();
             for seed in [1, 2] {
-                let mut ps = ProbeSettings::with_rays(4096);
+                let mut ps = ProbeSettings::with_rays::<volcache::core::space::D2>(4096);
                 ps.settings.max_depth = 2;
                 let lf = capture(&scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, &Progress::new()).unwrap();
                 let aw = AwareSettings::default();
@@ -131,7 +131,7 @@ fn forward_scattering_into_an_emitter() {
         let omega_o = (x - DVec2::new(0.05, 0.6)).normalize();
         let exact = exact2d::derivatives(&scene, x, omega_o, 1e-4).luminance();
         for seed in 1..=3 {
-            let mut ps = ProbeSettings::with_rays(4096);
+            let mut ps = ProbeSettings::with_rays::<volcache::core::space::D2>(4096);
             ps.settings.max_depth = 2;
             let lf = capture(&scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, &Progress::new()).unwrap();
             let aw = AwareSettings::default();

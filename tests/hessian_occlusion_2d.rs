@@ -58,7 +58,7 @@ fn hessian_errors(scene: &Scene, points: &[DVec2], omega_o: DVec2, rays: usize, 
         .iter()
         .map(|&x| {
             let exact = exact2d::derivatives(scene, x, omega_o, 1e-4).luminance();
-            let mut ps = ProbeSettings::with_rays(rays);
+            let mut ps = ProbeSettings::with_rays::<volcache::core::space::D2>(rays);
             ps.settings.max_depth = 2;
             let lf = capture(scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, &Progress::new()).unwrap();
             let aw = AwareSettings::default();

@@ -98,7 +98,7 @@ type SceneFn = fn(f64, f64) -> Scene;
 /// Relative gradient and Hessian errors of the aware single part at `x`.
 fn errors(scene: &Scene, x: DVec3, omega_o: DVec3, rays: usize, seed: u64) -> (f64, f64) {
     let exact = exact3d::derivatives(scene, x, omega_o, 1e-4).luminance();
-    let mut ps = ProbeSettings::with_rays(rays);
+    let mut ps = ProbeSettings::with_rays::<volcache::core::space::D3>(rays);
     ps.settings.max_depth = 2;
     let lf = capture(scene, x, Outgoing::Direction(omega_o), &ps, seed, 0, &Progress::new()).unwrap();
     let aw = AwareSettings::default();

@@ -80,8 +80,9 @@ pub struct ProbeArgs {
     pub steps: usize,
     /// Refinement of the march towards x: 0 spaces the samples evenly, k > 0 makes
     /// the first steps k/(e^k − 1) of the even step (see `pipeline::probe::March`).
-    #[arg(long, default_value_t = volcache::pipeline::probe::DEFAULT_GRADING)]
-    pub grading: f64,
+    /// Default: measured per dimension (6 in 2D, 0 in 3D).
+    #[arg(long)]
+    pub grading: Option<f64>,
     /// Finite-difference step as a fraction of the scene size (reference).
     #[arg(long, default_value_t = 1e-2)]
     pub fd_step: f64,

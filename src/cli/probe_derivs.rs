@@ -93,7 +93,8 @@ fn shared<S: Dim>(a: &ProbeArgs, max_depth: u32, scene_seed: u64) -> anyhow::Res
     check_count("--paths", a.paths as u64, 1024)?;
     check_range("--fd-step", a.fd_step, limits::FD_STEP)?;
     check_range("--medium-clamp", a.medium_clamp, limits::MEDIUM_CLAMP)?;
-    check_range("--grading", a.grading, limits::GRADING)?;
+    let grading = a.grading.unwrap_or(S::PROBE_GRADING);
+    check_range("--grading", grading, limits::GRADING)?;
     if let Some(spp) = a.spp {
         check_spp("--spp", spp, limits::MAX_PROBE_SPP)?;
     }
@@ -106,7 +107,7 @@ fn shared<S: Dim>(a: &ProbeArgs, max_depth: u32, scene_seed: u64) -> anyhow::Res
             rays: a.rays,
             paths: a.paths.max(1),
             steps: a.steps.max(1),
-            grading: a.grading,
+            grading,
             settings,
             ..ProbeSettings::default_for::<S>()
         },

@@ -34,7 +34,7 @@ pub struct Cache3dArgs {
     pub steps: usize,
     /// Refinement of the march towards x: 0 spaces the samples evenly, k > 0 makes
     /// the first steps k/(e^k − 1) of the even step (see `pipeline::probe::March`).
-    #[arg(long, default_value_t = volcache::pipeline::probe::DEFAULT_GRADING)]
+    #[arg(long, default_value_t = <volcache::core::space::D3 as volcache::pipeline::dim::Dim>::PROBE_GRADING)]
     pub grading: f64,
     /// Recursive paths per probe hit and per medium sample.
     #[arg(long, default_value_t = 1)]

@@ -64,18 +64,18 @@ pub struct ProbeSettings {
 }
 
 impl ProbeSettings {
-    /// The defaults for dimension `S` ([`Dim::PROBE_RAYS`] directions).
+    /// The defaults for dimension `S` ([`Dim::PROBE_RAYS`] directions, [`Dim::PROBE_GRADING`]).
     pub fn default_for<S: Dim>() -> Self {
-        Self::with_rays(S::PROBE_RAYS)
+        Self::with_rays::<S>(S::PROBE_RAYS)
     }
 
-    /// The defaults with `rays` directions.
-    pub fn with_rays(rays: usize) -> Self {
+    /// The defaults for dimension `S` with `rays` directions.
+    pub fn with_rays<S: Dim>(rays: usize) -> Self {
         ProbeSettings {
             rays,
             paths: 1,
             steps: 24,
-            grading: DEFAULT_GRADING,
+            grading: S::PROBE_GRADING,
             transmittance_cutoff: 1e-3,
             far_factor: 4.0,
             jitter: 1.0,
@@ -83,18 +83,6 @@ impl ProbeSettings {
         }
     }
 }
-
-/// The measured default of [`ProbeSettings::grading`] (see [`March`]).
-///
-/// Measured on the 2D caches (`volcache caches --method ours --caches N`, 1024 rays,
-/// 16 steps, 128×128, against 2048 spp): occluder.json at 800 records RMSE 7.8e-3
-/// for seeds 1, 2, 3 at k = 6 against 1.45–1.93e-2 at k = 0 (400 records: 1.0e-2
-/// against 1.39–2.52e-2), at 1.35–1.6× the time; windows.json 7.3e-3 against
-/// 7.6e-3 at 800 records (its short rays now keep more medium samples: 1.8× the
-/// paths). The multiple-scattering gradient against finite differences of path
-/// tracing (tests/derivatives.rs, 12 points): median vector error 0.56 at k = 0,
-/// 0.23 at k = 3, 0.15 at k = 6, 0.25 at k = 9.
-pub const DEFAULT_GRADING: f64 = 6.0;
 
 /// The largest refinement per march step: adjacent steps' thicknesses differ by at
 /// most e^0.375 ≈ 1.45, the default's growth at the CLI's 16 steps.
