@@ -82,9 +82,10 @@ impl Cache3dArgs {
             "--rays must be between 4 and 1048576"
         );
         anyhow::ensure!((1..=4096).contains(&self.steps), "--steps must be between 1 and 4096");
+        let (lo, hi) = volcache::limits::GRADING;
         anyhow::ensure!(
-            (0.0..=30.0).contains(&self.grading),
-            "--grading must be between 0 and 30"
+            (lo..=hi).contains(&self.grading),
+            "--grading must be between {lo} and {hi}"
         );
         anyhow::ensure!((1..=1024).contains(&self.paths), "--paths must be between 1 and 1024");
         anyhow::ensure!(

@@ -184,14 +184,14 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
 /// surfaces' exact one. The radius was measured in a furnace at g = ±0.9 (4 seeds,
 /// 3 points per dimension): a = ε left the Hessians 3× noisier, a = 4ε bent the
 /// lobe at walls 0.4 away (a false gradient of 0.6·L_s per unit length).
-fn near_field_phase<S: Dim>(lf: &LightField<S>, c: S::Vec, soft: f64, eps: f64) -> Taylor2<S> {
+/// `exact` is the phase towards `c` softened only at `soft` (the caller has it).
+fn near_field_phase<S: Dim>(lf: &LightField<S>, c: S::Vec, soft: f64, eps: f64, exact: Taylor2<S>) -> Taylor2<S> {
     let x = lf.x;
     let a = 2.0 * eps;
     let r = S::length(c - x);
-    let exact = || phase_taylor_out::<S>(lf.g, x, c, lf.outgoing(), soft);
     let smooth = || phase_taylor_out::<S>(lf.g, x, c, lf.outgoing(), a.max(soft));
     if lf.g == 0.0 || r >= 2.0 * a {
-        return exact();
+        return exact;
     }
     if r <= a {
         return smooth();
@@ -203,7 +203,7 @@ fn near_field_phase<S: Dim>(lf: &LightField<S>, c: S::Vec, soft: f64, eps: f64) 
     let dw = 30.0 * s * s * (1.0 - s) * (1.0 - s) / a;
     let d2w = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s) / (a * a);
     let w = distance::<S>(x, c, 0.0).compose(w, dw, d2w);
-    let (e, m) = (exact(), smooth());
+    let (e, m) = (exact, smooth());
     m + w * (e - m)
 }
 
@@ -279,10 +279,12 @@ fn medium_point<S: Dim>(
     let x = lf.x;
     let r = S::length(p - x);
     let t = transmittance_taylor_rgb::<S>(lf.sigma_t, x, p, soft);
+    // The exact phase, once: the value's, and the kernels' beyond their near field.
+    let phase = phase_taylor_out::<S>(lf.g, x, p, lf.outgoing(), soft);
     let local = lf.march.thickness_at(r);
     let kernel = |scale: f64| {
         TaylorRgb::tint(
-            smoothed_kernel(lf, p, dir_measure, soft, local, medium_clamp * scale),
+            smoothed_kernel(lf, p, dir_measure, soft, phase, local, medium_clamp * scale),
             radiance,
         )
         .mul_channels(t)
@@ -297,7 +299,7 @@ fn medium_point<S: Dim>(
         }
     }
     // The exact value.
-    let exact = dir_measure * phase_taylor_out::<S>(lf.g, x, p, lf.outgoing(), soft).value;
+    let exact = dir_measure * phase.value;
     for (ch, (tc, rad)) in c
         .channels
         .iter_mut()
@@ -312,12 +314,14 @@ fn medium_point<S: Dim>(
 const HESSIAN_SCALE_REACH: f64 = 32.0;
 
 /// f_ε·F_ε/Δt of a medium point of thickness Δt (F = Ω r^{d−1} Δt / r_ε^{d−1}),
-/// smoothed at ε = `smoothing` (or the piece's own size), value included.
+/// smoothed at ε = `smoothing` (or the piece's own size), value included; `phase`
+/// is the exact phase towards p ([`near_field_phase`]).
 fn smoothed_kernel<S: Dim>(
     lf: &LightField<S>,
     p: S::Vec,
     dir_measure: f64,
     soft: f64,
+    phase: Taylor2<S>,
     step: f64,
     smoothing: f64,
 ) -> Taylor2<S> {
@@ -330,7 +334,7 @@ fn smoothed_kernel<S: Dim>(
         value: measure / (r * r + eps * eps).powf(0.5 * n as f64),
         ..medium_form_factor_smoothed::<S>(p, measure, x, smoothing)
     };
-    form * near_field_phase(lf, p, soft, eps) * (1.0 / step)
+    form * near_field_phase(lf, p, soft, eps, phase) * (1.0 / step)
 }
 
 /// Elements summed per parallel task: the partial sums are added in a fixed order,
