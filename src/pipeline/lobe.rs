@@ -5,6 +5,7 @@
 
 use super::dim::Dim;
 use crate::core::color::Rgb;
+use crate::core::phase::hg_of_mu;
 use crate::core::rng::Sampler;
 
 #[derive(Clone, Copy, Debug)]
@@ -16,6 +17,16 @@ pub enum Lobe<S: Dim> {
     Lambert { normal: S::Vec, reflectance: Rgb },
     /// Plain integration over all directions (fluence).
     Uniform,
+    /// The derivative of [`Lobe::Phase`]'s value with respect to `travel`, along
+    /// the unit `axis`: ∂f(travel, ω)/∂travel · axis (signed), sampled and weighted
+    /// like the phase itself (same pdf, so NEE's MIS weights are the phase's).
+    /// Light gathered with it is the direction derivative of the light scattered
+    /// back along −travel ([`super::path::scattered_with_slope`]).
+    PhaseSlope {
+        phase: S::Phase,
+        travel: S::Vec,
+        axis: S::Vec,
+    },
 }
 
 impl<S: Dim> Lobe<S> {
@@ -32,6 +43,11 @@ impl<S: Dim> Lobe<S> {
                 (reflectance * c, c)
             }
             Lobe::Uniform => (Rgb::ONE, 1.0 / S::SPHERE_MEASURE),
+            Lobe::PhaseSlope { phase, travel, axis } => {
+                let f = S::phase_eval(&phase, travel, w);
+                let slope = S::dot(phase_log_slope::<S>(&phase, travel, w), axis);
+                (Rgb::splat(f * slope), f)
+            }
         }
     }
 
@@ -52,7 +68,29 @@ impl<S: Dim> Lobe<S> {
                 Rgb::splat(S::SPHERE_MEASURE),
                 1.0 / S::SPHERE_MEASURE,
             ),
+            Lobe::PhaseSlope { phase, travel, axis } => {
+                let w = S::phase_sample(&phase, travel, s);
+                let slope = S::dot(phase_log_slope::<S>(&phase, travel, w), axis);
+                (w, Rgb::splat(slope), S::phase_eval(&phase, travel, w))
+            }
         }
+    }
+}
+
+/// ∇_travel ln f(travel, ω) of the HG phase (μ = travel·ω): (d ln f/dμ)(ω − μ·travel),
+/// tangent to the unit sphere (circle) at `travel`. Zero for g = 0; finite for any
+/// |g| < 1 (at most (d+1)|g|/(1 − |g|)² in length).
+pub fn phase_log_slope<S: Dim>(phase: &S::Phase, travel: S::Vec, w: S::Vec) -> S::Vec {
+    let g = S::phase_g(phase);
+    if g == 0.0 {
+        return S::zero();
+    }
+    let mu = S::dot(travel, w);
+    let (f, df, _) = hg_of_mu::<S>(g, mu);
+    if f > 0.0 {
+        (w - travel * mu) * (df / f)
+    } else {
+        S::zero()
     }
 }
 
@@ -145,6 +183,51 @@ mod tests {
                 se.x
             );
         }
+    }
+
+    /// `PhaseSlope`'s value is the derivative of the phase with respect to the
+    /// travel direction (central differences on the unit sphere, circle), for g up
+    /// to ±0.99 and directions from forward to backward.
+    fn phase_slope_is_the_phase_derivative<S: Dim>() {
+        let mut s = Sampler::new(3, 1);
+        for g in [0.0, 0.3, -0.5, 0.9, -0.99, 0.99] {
+            let phase = S::phase(g);
+            for _ in 0..200 {
+                let (travel, w, axis) = (
+                    S::sample_uniform(&mut s),
+                    S::sample_uniform(&mut s),
+                    S::sample_uniform(&mut s),
+                );
+                let h = 1e-6;
+                let turned = |e: f64| {
+                    let t = travel + axis * e;
+                    S::phase_eval(&phase, t / S::length(t), w)
+                };
+                // The derivative along `axis` of f at travel normalised: the tangent part.
+                let want = (turned(h) - turned(-h)) / (2.0 * h);
+                let slope: Lobe<S> = Lobe::PhaseSlope { phase, travel, axis };
+                let (value, pdf) = slope.eval(w);
+                let f = S::phase_eval(&phase, travel, w);
+                assert_eq!(pdf, f, "the slope lobe keeps the phase's pdf");
+                let tol = 1e-5 * (f + want.abs()) / (1.0 - g.abs()).powi(2);
+                assert!(
+                    (value.x - want).abs() <= tol,
+                    "d = {}, g = {g}: {} vs {want}",
+                    S::DIM,
+                    value.x
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn phase_slope_is_the_phase_derivative_on_the_circle() {
+        phase_slope_is_the_phase_derivative::<D2>();
+    }
+
+    #[test]
+    fn phase_slope_is_the_phase_derivative_on_the_sphere() {
+        phase_slope_is_the_phase_derivative::<D3>();
     }
 
     #[test]

@@ -15,13 +15,14 @@
 //! stream derived from (seed, item, sample), so results do not depend on threads.
 
 use super::dim::Dim;
-use super::lobe::Lobe;
+use super::lobe::{Lobe, phase_log_slope};
 use super::medium::pass_probability;
 use super::world::{Hit, SurfacePoint, VecOf, World};
 use crate::core::color::Rgb;
 use crate::core::free_flight::Flight;
 use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
+use crate::core::space::Space;
 use serde::{Deserialize, Serialize};
 
 /// Path-tracing settings.
@@ -226,6 +227,124 @@ pub fn sample_at<W: World>(
         }
     }
     parts.scaled(prefactor)
+}
+
+/// The light a medium point `x` scatters back along −`travel` (one sample of
+/// ∫ f(travel, ω) L_i(x, ω) dω, all parts, no σ_s) and its gradient with respect to
+/// `travel` per channel, from the same sample: NEE replayed with the phase's
+/// derivative as lobe (the same light sample, pdf and MIS weight) and the lobe-sampled
+/// path weighted by ∇ ln f (its score). The value is bit for bit [`sample_at`]'s.
+///
+/// Why: a probe's medium sample m is seen from x along ω = (m − x)/r, so what m sends
+/// to x turns with x; holding it fixed leaves out ∫ K ∂_ωL·∇_x ω dm, which is
+/// log-divergent near x (∇_x ω ∝ 1/r) wherever f ≠ const and the light at m is
+/// anisotropic.
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
+pub fn scattered_with_slope<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    phase: <W::S as Dim>::Phase,
+    travel: VecOf<W>,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> ScatteredSample<VecOf<W>> {
+    let mut out = ScatteredSample {
+        value: Rgb::ZERO,
+        slope: [W::S::zero(); 3],
+        score: W::S::zero(),
+        path: Rgb::ZERO,
+    };
+    let lobe = Lobe::Phase { phase, travel };
+    let anisotropic = W::S::phase_g(&phase) != 0.0;
+    let replay = s.clone();
+    let mut parts = Parts {
+        direct: world.delta_lights(x, &lobe, None, rays),
+        single: world.sampled_nee(x, &lobe, None, true, s, rays),
+        multiple: Rgb::ZERO,
+    };
+    let mut slope = [W::S::zero(); 3];
+    let mut add = |l: Rgb, along: VecOf<W>| {
+        for (c, v) in slope.iter_mut().zip([l.x, l.y, l.z]) {
+            *c += along * v;
+        }
+    };
+    if anisotropic {
+        // The gradient is tangent at `travel`: d − 1 directions span it.
+        let axes = tangent_axes::<W::S>(travel);
+        for &axis in &axes[..W::S::DIM - 1] {
+            let d = Lobe::PhaseSlope { phase, travel, axis };
+            let mut again = replay.clone();
+            add(world.delta_lights(x, &d, None, rays), axis);
+            add(world.sampled_nee(x, &d, None, true, &mut again, rays), axis);
+        }
+    }
+    let (w, weight, pdf) = lobe.sample(s);
+    if weight != Rgb::ZERO {
+        let (l, first) = radiance_path(world, x, w, None, Some(pdf), settings, s, rays);
+        match first {
+            FirstEvent::Scatter => parts.multiple += weight * l,
+            FirstEvent::Surface | FirstEvent::Escape => parts.single += weight * l,
+        }
+        if anisotropic {
+            out.score = phase_log_slope::<W::S>(&phase, travel, w);
+            out.path = weight * l;
+        }
+    }
+    out.value = parts.total();
+    out.slope = slope;
+    out
+}
+
+/// An orthonormal basis of the directions across the unit `w` (the first d − 1
+/// entries): Gram–Schmidt over the world axes least aligned with `w` first.
+fn tangent_axes<S: Dim>(w: S::Vec) -> [S::Vec; 3] {
+    let mut order: [usize; 3] = [0, 1, 2];
+    let along = |j: usize| {
+        if j < S::DIM {
+            S::dot(w, S::axis(j)).abs()
+        } else {
+            f64::INFINITY
+        }
+    };
+    order.sort_by(|&a, &b| along(a).total_cmp(&along(b)));
+    let mut out = [S::zero(); 3];
+    for k in 0..S::DIM - 1 {
+        let mut v = S::axis(order[k]);
+        v -= w * S::dot(v, w);
+        for &u in &out[..k] {
+            v -= u * S::dot(v, u);
+        }
+        out[k] = v / S::length(v);
+    }
+    out
+}
+
+/// One sample of [`scattered_with_slope`]: the value, and the direction gradient
+/// `slope + score ⊗ (path − b)` for any baseline b that does not depend on this
+/// sample's draws (E[score] = ∫∇f dω = 0 under phase sampling, so b changes only the
+/// variance: the caller passes the mean of other samples' `path`).
+#[derive(Clone, Copy, Debug)]
+pub struct ScatteredSample<V> {
+    pub value: Rgb,
+    /// The NEE part of the gradient, per channel.
+    pub slope: [V; 3],
+    /// ∇ ln f at the lobe-sampled direction.
+    pub score: V,
+    /// What the lobe-sampled path brought.
+    pub path: Rgb,
+}
+
+impl<V: Copy + std::ops::Mul<f64, Output = V> + std::ops::Add<Output = V>> ScatteredSample<V> {
+    /// The gradient per channel with baseline `b`.
+    pub fn gradient(&self, b: Rgb) -> [V; 3] {
+        let d = self.path - b;
+        let mut g = self.slope;
+        for (c, v) in g.iter_mut().zip([d.x, d.y, d.z]) {
+            *c = *c + self.score * v;
+        }
+        g
+    }
 }
 
 /// The radiance leaving the surface point of `hit` back along `dir` (the ray that

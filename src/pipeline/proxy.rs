@@ -71,9 +71,11 @@ pub struct Element<S: Dim> {
     /// tangent plane (a point on it, its normal), onto which the near vertices slide
     /// as x moves ([`super::slide`]).
     pub far_plane: Option<(S::Vec, S::Vec)>,
-    /// Each vertex's own sample: where it is evaluated and its radiance (for medium
-    /// elements L_s·Δt of that sample, zero where the ray ended before the shell).
-    pub samples: S::Simplex<(S::Vec, Rgb)>,
+    /// Each vertex's own sample: where it is evaluated, its radiance (for medium
+    /// elements L_s·Δt of that sample, zero where the ray ended before the shell) and
+    /// that radiance's gradient per channel with respect to the direction it is
+    /// seen from ([`ProbeRay::slopes`], times Δt; zero for surfaces).
+    pub samples: S::Simplex<Sample<S>>,
 }
 
 impl<S: Dim> crate::core::metric::Radiant for Element<S> {
@@ -96,9 +98,14 @@ impl<S: Dim> Element<S> {
     }
 }
 
-/// A vertex of an element: position, distance from x (for the rules), radiance, and
-/// where its transmittance and phase are evaluated.
-type Vertex<S> = (<S as Space>::Vec, f64, Rgb, <S as Space>::Vec);
+/// A vertex's sample: where it is, its radiance, and the radiance's direction
+/// gradient per channel.
+pub type Sample<S> = (<S as Space>::Vec, Rgb, [<S as Space>::Vec; 3]);
+
+/// A vertex of an element: position, distance from x (for the rules), radiance,
+/// where its transmittance and phase are evaluated, and the radiance's direction
+/// gradient (medium samples only).
+type Vertex<S> = (<S as Space>::Vec, f64, Rgb, <S as Space>::Vec, [<S as Space>::Vec; 3]);
 
 fn make<S: Dim>(
     x: S::Vec,
@@ -126,7 +133,7 @@ fn make<S: Dim>(
         bridging,
         dir_measure,
         far_plane: None,
-        samples: S::simplex(|k| (v[k].3, v[k].2)),
+        samples: S::simplex(|k| (v[k].3, v[k].2, v[k].4)),
     }
 }
 
@@ -152,8 +159,8 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
             // A hit next to a visibility boundary stands at the surface's true edge
             // (see `silhouette`), with the radiance its ray found.
             match r.hit.as_ref().and_then(|h| h.edge) {
-                Some(e) => (e, S::length(e - x), l, e),
-                None => (p, d, l, p),
+                Some(e) => (e, S::length(e - x), l, e, [S::zero(); 3]),
+                None => (p, d, l, p, [S::zero(); 3]),
             }
         })
         .collect();
@@ -232,10 +239,12 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
                 if present.as_ref()[k] {
                     let d = lf.sample_depth(r, i);
                     let p = x + r.dir * d;
-                    (p, d, r.samples[i] * lf.sample_thickness(r, i), p)
+                    let dt = lf.sample_thickness(r, i);
+                    let slope = r.slopes.get(i).map_or([S::zero(); 3], |g| g.map(|v| v * dt));
+                    (p, d, r.samples[i] * dt, p, slope)
                 } else {
                     let e = ends[t.as_ref()[k] as usize];
-                    (e.0, e.1, Rgb::ZERO, e.3)
+                    (e.0, e.1, Rgb::ZERO, e.3, [S::zero(); 3])
                 }
             });
             if v.as_ref().iter().all(|e| e.2 == Rgb::ZERO) {

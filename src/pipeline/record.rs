@@ -117,7 +117,12 @@ pub fn compute_record<W: World>(
     progress: &Progress,
 ) -> Result<RecordData<W::S>, Cancelled> {
     let start = Instant::now();
-    let lf = capture(world, x, out, &cs.probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;
+    // Jarosz et al. 2008 hold each sample's light fixed: no slopes to pay for.
+    let probe = ProbeSettings {
+        slopes: cs.probe.slopes && cs.method == CacheMethod::Ours,
+        ..cs.probe
+    };
+    let lf = capture(world, x, out, &probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;
     let zero = <W::S as Space>::zero_mat();
     let (mut parts, metric_hessians) = match cs.method {
         CacheMethod::Ours => {
