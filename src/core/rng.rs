@@ -21,9 +21,7 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
-/// A random stream for one work item (pixel, probe point, sample index...). Cloned
-/// to replay a draw (a light sample evaluated again with a derivative's lobe).
-#[derive(Clone)]
+/// A random stream for one work item (pixel, probe point, sample index...).
 pub struct Sampler {
     rng: Pcg64Mcg,
 }

@@ -22,8 +22,15 @@ pub type Lobe = crate::pipeline::lobe::Lobe<D2>;
 
 /// Light from point and collimated lights arriving at `p` and weighted by `lobe`
 /// (∫ value(ω) L_i,delta(ω) dω). `skip` is the segment `p` lies on, if any.
-pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays);
+pub fn direct_lights(
+    scene: &Scene,
+    p: DVec2,
+    lobe: &Lobe,
+    skip: Option<u32>,
+    rays: &mut u64,
+    each: &mut impl FnMut(DVec2, Rgb),
+) -> Rgb {
+    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays, each);
     for l in &scene.collimated_lights {
         let w = -l.direction;
         // The beam reaches p only through its aperture.
@@ -34,7 +41,7 @@ pub fn direct_lights(scene: &Scene, p: DVec2, lobe: &Lobe, skip: Option<u32>, ra
                 radiance: l.irradiance,
                 pdf: 1.0,
             };
-            sum += light_sample(scene, p, lobe, skip, &l, false, rays);
+            sum += light_sample(scene, p, lobe, skip, &l, false, rays, each);
         }
     }
     sum
@@ -65,6 +72,7 @@ pub fn emitter_pdf(scene: &Scene, p: DVec2, seg: u32) -> f64 {
 /// One-sample NEE to emitting segments at `p`, weighted by `lobe`. With `mis`, the
 /// result carries the power-heuristic weight against lobe sampling (the path then
 /// weights emission it hits with [`emitter_pdf`]); without, the full contribution.
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn emitter_nee(
     scene: &Scene,
     p: DVec2,
@@ -73,6 +81,7 @@ pub fn emitter_nee(
     mis: bool,
     s: &mut Sampler,
     rays: &mut u64,
+    each: &mut impl FnMut(DVec2, Rgb),
 ) -> Rgb {
     if scene.emitters.is_empty() {
         return Rgb::ZERO;
@@ -105,7 +114,7 @@ pub fn emitter_nee(
         radiance: seg.emission,
         pdf,
     };
-    light_sample(scene, p, lobe, skip, &l, mis, rays)
+    light_sample(scene, p, lobe, skip, &l, mis, rays, each)
 }
 
 /// The delta lights visible from `x` (theory.md §2), and the shadow rays this cost.

@@ -54,12 +54,28 @@ impl World for Scene {
         }
     }
 
-    fn delta_lights(&self, p: DVec2, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-        lights::direct_lights(self, p, lobe, skip, rays)
+    fn delta_lights_each(
+        &self,
+        p: DVec2,
+        lobe: &Lobe,
+        skip: Option<u32>,
+        rays: &mut u64,
+        each: &mut impl FnMut(DVec2, Rgb),
+    ) -> Rgb {
+        lights::direct_lights(self, p, lobe, skip, rays, each)
     }
 
-    fn sampled_nee(&self, p: DVec2, lobe: &Lobe, skip: Option<u32>, mis: bool, s: &mut Sampler, rays: &mut u64) -> Rgb {
-        lights::emitter_nee(self, p, lobe, skip, mis, s, rays)
+    fn sampled_nee_each(
+        &self,
+        p: DVec2,
+        lobe: &Lobe,
+        skip: Option<u32>,
+        mis: bool,
+        s: &mut Sampler,
+        rays: &mut u64,
+        each: &mut impl FnMut(DVec2, Rgb),
+    ) -> Rgb {
+        lights::emitter_nee(self, p, lobe, skip, mis, s, rays, each)
     }
 
     fn emitter_pdf(&self, from: DVec2, prim: u32, _y: DVec2) -> f64 {

@@ -33,6 +33,9 @@ pub struct LightSample<V> {
 
 /// value(w)·L·T/pdf of a light sample from `p` (zero if the lobe ignores `w` or the
 /// light is occluded), with `mis` the power-heuristic weight against lobe sampling.
+/// `each` sees every non-zero sample with its direction (the probes' direction
+/// slopes reweight them; other callers pass [`ignore`]).
+#[allow(clippy::too_many_arguments)] // the light sample's state is spelled out
 pub fn light_sample<W: World>(
     world: &W,
     p: VecOf<W>,
@@ -41,6 +44,7 @@ pub fn light_sample<W: World>(
     l: &LightSample<VecOf<W>>,
     mis: bool,
     rays: &mut u64,
+    each: &mut impl FnMut(VecOf<W>, Rgb),
 ) -> Rgb {
     let (value, lobe_pdf) = lobe.eval(l.w);
     if value == Rgb::ZERO {
@@ -66,8 +70,14 @@ pub fn light_sample<W: World>(
     } else {
         1.0
     };
-    value * l.radiance * tr * (weight / l.pdf)
+    let c = value * l.radiance * tr * (weight / l.pdf);
+    each(l.w, c);
+    c
 }
+
+/// A light-sample observer that ignores every sample.
+#[inline]
+pub fn ignore<V>(_: V, _: Rgb) {}
 
 /// Unit direction and distance from `p` to a light at `q` (None on top of it).
 fn towards<S: Dim>(p: S::Vec, q: S::Vec) -> Option<(S::Vec, f64)> {
@@ -85,6 +95,7 @@ pub fn point_lights<W: World>(
     lobe: &Lobe<W::S>,
     skip: Option<u32>,
     rays: &mut u64,
+    each: &mut impl FnMut(VecOf<W>, Rgb),
 ) -> Rgb {
     let r_min = 1e-9 * world.scale();
     let mut sum = Rgb::ZERO;
@@ -97,7 +108,7 @@ pub fn point_lights<W: World>(
                 radiance,
                 pdf: 1.0,
             };
-            sum += light_sample(world, p, lobe, skip, &l, false, rays);
+            sum += light_sample(world, p, lobe, skip, &l, false, rays, each);
         }
     }
     sum

@@ -231,9 +231,9 @@ pub fn sample_at<W: World>(
 
 /// The light a medium point `x` scatters back along −`travel` (one sample of
 /// ∫ f(travel, ω) L_i(x, ω) dω, all parts, no σ_s) and its gradient with respect to
-/// `travel` per channel, from the same sample: NEE replayed with the phase's
-/// derivative as lobe (the same light sample, pdf and MIS weight) and the lobe-sampled
-/// path weighted by ∇ ln f (its score). The value is bit for bit [`sample_at`]'s.
+/// `travel` per channel, from the same sample: each light sample and the
+/// lobe-sampled path weighted by its score ∇_travel ln f. The value is bit for bit
+/// [`sample_at`]'s, and the gradient costs no ray.
 ///
 /// Why: a probe's medium sample m is seen from x along ω = (m − x)/r, so what m sends
 /// to x turns with x; holding it fixed leaves out ∫ K ∂_ωL·∇_x ω dm, which is
@@ -249,36 +249,20 @@ pub fn scattered_with_slope<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> ScatteredSample<VecOf<W>> {
-    let mut out = ScatteredSample {
-        value: Rgb::ZERO,
-        slope: [W::S::zero(); 3],
-        score: W::S::zero(),
-        path: Rgb::ZERO,
-    };
     let lobe = Lobe::Phase { phase, travel };
-    let anisotropic = W::S::phase_g(&phase) != 0.0;
-    let replay = s.clone();
-    let mut parts = Parts {
-        direct: world.delta_lights(x, &lobe, None, rays),
-        single: world.sampled_nee(x, &lobe, None, true, s, rays),
-        multiple: Rgb::ZERO,
-    };
     let mut slope = [W::S::zero(); 3];
-    let mut add = |l: Rgb, along: VecOf<W>| {
+    let mut add = |along: VecOf<W>, l: Rgb| {
         for (c, v) in slope.iter_mut().zip([l.x, l.y, l.z]) {
             *c += along * v;
         }
     };
-    if anisotropic {
-        // The gradient is tangent at `travel`: d − 1 directions span it.
-        let axes = tangent_axes::<W::S>(travel);
-        for &axis in &axes[..W::S::DIM - 1] {
-            let d = Lobe::PhaseSlope { phase, travel, axis };
-            let mut again = replay.clone();
-            add(world.delta_lights(x, &d, None, rays), axis);
-            add(world.sampled_nee(x, &d, None, true, &mut again, rays), axis);
-        }
-    }
+    let mut tap = |w: VecOf<W>, c: Rgb| add(phase_log_slope::<W::S>(&phase, travel, w), c);
+    let mut parts = Parts {
+        direct: world.delta_lights_each(x, &lobe, None, rays, &mut tap),
+        single: world.sampled_nee_each(x, &lobe, None, true, s, rays, &mut tap),
+        multiple: Rgb::ZERO,
+    };
+    let (mut score, mut path) = (W::S::zero(), Rgb::ZERO);
     let (w, weight, pdf) = lobe.sample(s);
     if weight != Rgb::ZERO {
         let (l, first) = radiance_path(world, x, w, None, Some(pdf), settings, s, rays);
@@ -286,38 +270,15 @@ pub fn scattered_with_slope<W: World>(
             FirstEvent::Scatter => parts.multiple += weight * l,
             FirstEvent::Surface | FirstEvent::Escape => parts.single += weight * l,
         }
-        if anisotropic {
-            out.score = phase_log_slope::<W::S>(&phase, travel, w);
-            out.path = weight * l;
-        }
+        score = phase_log_slope::<W::S>(&phase, travel, w);
+        path = weight * l;
     }
-    out.value = parts.total();
-    out.slope = slope;
-    out
-}
-
-/// An orthonormal basis of the directions across the unit `w` (the first d − 1
-/// entries): Gram–Schmidt over the world axes least aligned with `w` first.
-fn tangent_axes<S: Dim>(w: S::Vec) -> [S::Vec; 3] {
-    let mut order: [usize; 3] = [0, 1, 2];
-    let along = |j: usize| {
-        if j < S::DIM {
-            S::dot(w, S::axis(j)).abs()
-        } else {
-            f64::INFINITY
-        }
-    };
-    order.sort_by(|&a, &b| along(a).total_cmp(&along(b)));
-    let mut out = [S::zero(); 3];
-    for k in 0..S::DIM - 1 {
-        let mut v = S::axis(order[k]);
-        v -= w * S::dot(v, w);
-        for &u in &out[..k] {
-            v -= u * S::dot(v, u);
-        }
-        out[k] = v / S::length(v);
+    ScatteredSample {
+        value: parts.total(),
+        slope,
+        score,
+        path,
     }
-    out
 }
 
 /// One sample of [`scattered_with_slope`]: the value, and the direction gradient

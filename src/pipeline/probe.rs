@@ -62,7 +62,7 @@ pub struct ProbeSettings {
     pub jitter: f64,
     /// Also estimate how each medium sample's L_s turns with the direction it is
     /// seen from ([`ProbeRay::slopes`]; the aware derivatives use it, the unaware
-    /// ones do not). Costs d extra NEE per medium path in an anisotropic medium.
+    /// ones do not). No extra rays: the light samples and the path are reweighted.
     pub slopes: bool,
     pub settings: Settings,
 }

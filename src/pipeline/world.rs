@@ -103,11 +103,36 @@ pub trait World: Sync {
     fn surface(&self, hit: &Hit, dir: VecOf<Self>) -> SurfacePoint<Self::S>;
 
     /// Light from delta lights arriving at `p`, weighted by `lobe` (`skip`: the
-    /// primitive `p` lies on).
-    fn delta_lights(&self, p: VecOf<Self>, lobe: &Lobe<Self::S>, skip: Option<u32>, rays: &mut u64) -> Rgb;
+    /// primitive `p` lies on); `each` sees every light's direction and share
+    /// (through [`super::nee::light_sample`]).
+    fn delta_lights_each(
+        &self,
+        p: VecOf<Self>,
+        lobe: &Lobe<Self::S>,
+        skip: Option<u32>,
+        rays: &mut u64,
+        each: &mut impl FnMut(VecOf<Self>, Rgb),
+    ) -> Rgb;
+    /// [`World::delta_lights_each`] without an observer.
+    fn delta_lights(&self, p: VecOf<Self>, lobe: &Lobe<Self::S>, skip: Option<u32>, rays: &mut u64) -> Rgb {
+        self.delta_lights_each(p, lobe, skip, rays, &mut super::nee::ignore)
+    }
     /// One sample of the light from lights with an extent (emitters, sky, sun
     /// cones) arriving at `p`, weighted by `lobe`; with `mis`, carrying the power
-    /// heuristic's weight against lobe sampling.
+    /// heuristic's weight against lobe sampling; `each` sees every sample's
+    /// direction and share.
+    #[allow(clippy::too_many_arguments)] // the vertex state is spelled out
+    fn sampled_nee_each(
+        &self,
+        p: VecOf<Self>,
+        lobe: &Lobe<Self::S>,
+        skip: Option<u32>,
+        mis: bool,
+        s: &mut Sampler,
+        rays: &mut u64,
+        each: &mut impl FnMut(VecOf<Self>, Rgb),
+    ) -> Rgb;
+    /// [`World::sampled_nee_each`] without an observer.
     #[allow(clippy::too_many_arguments)] // the vertex state is spelled out
     fn sampled_nee(
         &self,
@@ -117,7 +142,9 @@ pub trait World: Sync {
         mis: bool,
         s: &mut Sampler,
         rays: &mut u64,
-    ) -> Rgb;
+    ) -> Rgb {
+        self.sampled_nee_each(p, lobe, skip, mis, s, rays, &mut super::nee::ignore)
+    }
     /// All next-event estimation at a path vertex.
     #[allow(clippy::too_many_arguments)] // the vertex state is spelled out
     fn nee(

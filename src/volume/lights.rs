@@ -16,7 +16,7 @@ use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
 use crate::core::space::D3;
 use crate::pipeline::dim::Dim;
-use crate::pipeline::nee::{LightSample, gather, light_sample, point_lights};
+use crate::pipeline::nee::{LightSample, gather, ignore, light_sample, point_lights};
 use crate::pipeline::world::{DirectLight, World};
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
@@ -26,8 +26,15 @@ pub type Lobe = crate::pipeline::lobe::Lobe<D3>;
 
 /// Light from delta lights (point lights, suns without a cone) at `p`, weighted by
 /// `lobe`. `skip` is the triangle `p` lies on, if any.
-pub fn delta_lights(scene: &Scene, p: DVec3, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays);
+pub fn delta_lights(
+    scene: &Scene,
+    p: DVec3,
+    lobe: &Lobe,
+    skip: Option<u32>,
+    rays: &mut u64,
+    each: &mut impl FnMut(DVec3, Rgb),
+) -> Rgb {
+    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays, each);
     for sun in scene.suns.iter().filter(|s| s.is_delta()) {
         let l = LightSample {
             w: sun.to_sun,
@@ -35,7 +42,7 @@ pub fn delta_lights(scene: &Scene, p: DVec3, lobe: &Lobe, skip: Option<u32>, ray
             radiance: sun.irradiance,
             pdf: 1.0,
         };
-        sum += light_sample(scene, p, lobe, skip, &l, false, rays);
+        sum += light_sample(scene, p, lobe, skip, &l, false, rays, each);
     }
     sum
 }
@@ -52,6 +59,7 @@ fn sample_cone(axis: DVec3, cos_max: f64, u1: f64, u2: f64) -> DVec3 {
 
 /// NEE to the sky and to suns with a cone, one sample each. With `mis`, weighted by
 /// the power heuristic against lobe sampling (see [`escaped_radiance`]).
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn distant_nee(
     scene: &Scene,
     p: DVec3,
@@ -60,6 +68,7 @@ pub fn distant_nee(
     mis: bool,
     s: &mut Sampler,
     rays: &mut u64,
+    each: &mut impl FnMut(DVec3, Rgb),
 ) -> Rgb {
     let mut sum = Rgb::ZERO;
     let mut one = |w: DVec3, pdf: f64, radiance: Rgb, rays: &mut u64| {
@@ -69,7 +78,7 @@ pub fn distant_nee(
             radiance,
             pdf,
         };
-        sum += light_sample(scene, p, lobe, skip, &l, mis, rays);
+        sum += light_sample(scene, p, lobe, skip, &l, mis, rays, each);
     };
     if scene.sky != Rgb::ZERO {
         one(D3::sample_uniform(s), 1.0 / (4.0 * PI), scene.sky, rays);
@@ -117,6 +126,7 @@ pub fn emitter_pdf(scene: &Scene, p: DVec3, tri: u32, y: DVec3) -> f64 {
 /// One-sample NEE to emitting triangles at `p`, weighted by `lobe`; with `mis`, the
 /// power-heuristic weight against lobe sampling (paths weight emission they hit
 /// with [`emitter_pdf`]).
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn emitter_nee(
     scene: &Scene,
     p: DVec3,
@@ -125,6 +135,7 @@ pub fn emitter_nee(
     mis: bool,
     s: &mut Sampler,
     rays: &mut u64,
+    each: &mut impl FnMut(DVec3, Rgb),
 ) -> Rgb {
     if scene.emitters.is_empty() {
         return Rgb::ZERO;
@@ -158,14 +169,14 @@ pub fn emitter_nee(
         radiance: surf.emission,
         pdf,
     };
-    light_sample(scene, p, lobe, skip, &l, mis, rays)
+    light_sample(scene, p, lobe, skip, &l, mis, rays, each)
 }
 
 /// The direct part of L_s (theory.md §2) at a medium point: delta lights and suns
 /// with a cone, one cone sample each. No MIS: a radiance cache's probe rays leave
 /// sun cones to this part (see `probe`), so no other strategy samples them.
 pub fn direct_part(scene: &Scene, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: &mut u64) -> Rgb {
-    let mut sum = delta_lights(scene, p, lobe, None, rays);
+    let mut sum = delta_lights(scene, p, lobe, None, rays, &mut ignore);
     for sun in scene.suns.iter().filter(|s| !s.is_delta()) {
         let (u1, u2) = (s.next_f64(), s.next_f64());
         let w = sample_cone(sun.to_sun, sun.cos_max, u1, u2);
@@ -176,7 +187,7 @@ pub fn direct_part(scene: &Scene, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: 
             radiance: sun.radiance,
             pdf: 1.0 / sun.solid_angle(),
         };
-        sum += light_sample(scene, p, lobe, None, &l, false, rays);
+        sum += light_sample(scene, p, lobe, None, &l, false, rays, &mut ignore);
     }
     sum
 }

@@ -57,12 +57,29 @@ impl World for Scene {
         }
     }
 
-    fn delta_lights(&self, p: DVec3, lobe: &Lobe, skip: Option<u32>, rays: &mut u64) -> Rgb {
-        lights::delta_lights(self, p, lobe, skip, rays)
+    fn delta_lights_each(
+        &self,
+        p: DVec3,
+        lobe: &Lobe,
+        skip: Option<u32>,
+        rays: &mut u64,
+        each: &mut impl FnMut(DVec3, Rgb),
+    ) -> Rgb {
+        lights::delta_lights(self, p, lobe, skip, rays, each)
     }
 
-    fn sampled_nee(&self, p: DVec3, lobe: &Lobe, skip: Option<u32>, mis: bool, s: &mut Sampler, rays: &mut u64) -> Rgb {
-        lights::distant_nee(self, p, lobe, skip, mis, s, rays) + lights::emitter_nee(self, p, lobe, skip, mis, s, rays)
+    fn sampled_nee_each(
+        &self,
+        p: DVec3,
+        lobe: &Lobe,
+        skip: Option<u32>,
+        mis: bool,
+        s: &mut Sampler,
+        rays: &mut u64,
+        each: &mut impl FnMut(DVec3, Rgb),
+    ) -> Rgb {
+        lights::distant_nee(self, p, lobe, skip, mis, s, rays, each)
+            + lights::emitter_nee(self, p, lobe, skip, mis, s, rays, each)
     }
 
     fn emitter_pdf(&self, from: DVec3, prim: u32, y: DVec3) -> f64 {
