@@ -174,7 +174,7 @@ fn proxy_closes_and_capture_does_not_depend_on_threads_3d() {
 /// standard deviations; at |g| = 0.9 only that mean still tells the old bias apart.
 /// Since the medium samples carry their direction slopes (zero in expectation here,
 /// noise only), the 12 cases per row measure |∇L_s|/L_s ≤ 0.135 (2D) and ≤ 0.045
-/// (3D) at g = 0.6, ≤ 1.74 and ≤ 1.06 at |g| = 0.9; ‖H‖/L_s unchanged.
+/// (3D) at g = 0.6, ≤ 1.77 and ≤ 1.07 at |g| = 0.9; ‖H‖/L_s unchanged.
 fn furnace_has_no_gradient<F: Fixture>(rays: usize) {
     for g in [0.0f64, 0.6, 0.9, -0.9] {
         let strong = g.abs() > 0.7f64;
