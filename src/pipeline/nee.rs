@@ -34,7 +34,7 @@ pub struct LightSample<V> {
 /// value(w)·L·T/pdf of a light sample from `p` (zero if the lobe ignores `w` or the
 /// light is occluded), with `mis` the power-heuristic weight against lobe sampling.
 /// `each` sees every non-zero sample with its direction (the probes' direction
-/// slopes reweight them; other callers pass [`ignore`]).
+/// slopes reweight them; other callers pass [`super::world::ignore`]).
 #[allow(clippy::too_many_arguments)] // the light sample's state is spelled out
 pub fn light_sample<W: World>(
     world: &W,
@@ -74,10 +74,6 @@ pub fn light_sample<W: World>(
     each(l.w, c);
     c
 }
-
-/// A light-sample observer that ignores every sample.
-#[inline]
-pub fn ignore<V>(_: V, _: Rgb) {}
 
 /// Unit direction and distance from `p` to a light at `q` (None on top of it).
 fn towards<S: Dim>(p: S::Vec, q: S::Vec) -> Option<(S::Vec, f64)> {

@@ -115,7 +115,7 @@ pub trait World: Sync {
     ) -> Rgb;
     /// [`World::delta_lights_each`] without an observer.
     fn delta_lights(&self, p: VecOf<Self>, lobe: &Lobe<Self::S>, skip: Option<u32>, rays: &mut u64) -> Rgb {
-        self.delta_lights_each(p, lobe, skip, rays, &mut super::nee::ignore)
+        self.delta_lights_each(p, lobe, skip, rays, &mut ignore)
     }
     /// One sample of the light from lights with an extent (emitters, sky, sun
     /// cones) arriving at `p`, weighted by `lobe`; with `mis`, carrying the power
@@ -143,7 +143,7 @@ pub trait World: Sync {
         s: &mut Sampler,
         rays: &mut u64,
     ) -> Rgb {
-        self.sampled_nee_each(p, lobe, skip, mis, s, rays, &mut super::nee::ignore)
+        self.sampled_nee_each(p, lobe, skip, mis, s, rays, &mut ignore)
     }
     /// All next-event estimation at a path vertex.
     #[allow(clippy::too_many_arguments)] // the vertex state is spelled out
@@ -180,6 +180,11 @@ pub trait World: Sync {
     /// The delta lights visible from `x`, and the shadow rays this cost.
     fn direct_lights(&self, x: VecOf<Self>) -> (Vec<DirectLight<Self::S>>, u64);
 }
+
+/// A light-sample observer that ignores every sample (see
+/// [`super::nee::light_sample`]).
+#[inline]
+pub fn ignore<V>(_: V, _: Rgb) {}
 
 /// The vector type of a world's dimension.
 pub type VecOf<W> = <<W as World>::S as crate::core::space::Space>::Vec;

@@ -16,8 +16,8 @@ use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
 use crate::core::space::D3;
 use crate::pipeline::dim::Dim;
-use crate::pipeline::nee::{LightSample, gather, ignore, light_sample, point_lights};
-use crate::pipeline::world::{DirectLight, World};
+use crate::pipeline::nee::{LightSample, gather, light_sample, point_lights};
+use crate::pipeline::world::{DirectLight, World, ignore};
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
 
