@@ -51,22 +51,6 @@ pub fn hessian_radiance_floor(radiances: impl ExactSizeIterator<Item = Rgb>, fra
     Some(if mean == Rgb::ZERO { Rgb::ONE } else { mean * fraction })
 }
 
-/// A proxy element with a radiance (2D segment or 3D triangle element).
-pub trait Radiant: Clone {
-    fn radiance_mut(&mut self) -> &mut Rgb;
-}
-
-/// The elements with [`hessian_radiance_floor`] added to each (for the metric's
-/// Hessian only; the cached value keeps the elements' own radiance).
-pub fn with_radiance_floor<E: Radiant>(elements: &[E], fraction: f64) -> Vec<E> {
-    let mut out = elements.to_vec();
-    let floor = hessian_radiance_floor(out.iter_mut().map(|e| *e.radiance_mut()), fraction);
-    if let Some(floor) = floor {
-        out.iter_mut().for_each(|e| *e.radiance_mut() += floor);
-    }
-    out
-}
-
 /// Parameters of the extent computation (lengths in scene units, L in luminance).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MetricParams {

@@ -17,7 +17,7 @@
 use super::dim::Dim;
 use super::lobe::{Lobe, phase_log_slope};
 use super::medium::pass_probability;
-use super::world::{Hit, SurfacePoint, VecOf, World};
+use super::world::{Hit, SurfacePoint, VecOf, World, ignore};
 use crate::core::color::Rgb;
 use crate::core::free_flight::Flight;
 use crate::core::mis::power_heuristic;
@@ -213,20 +213,40 @@ pub fn sample_at<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Parts {
+    let (parts, _) = sample_at_each(world, x, lobe, skip, settings, s, rays, &mut ignore);
+    parts.scaled(prefactor)
+}
+
+/// [`sample_at`] without the prefactor, showing its parts: `each` sees every light
+/// sample's direction and share, and the lobe-sampled path comes back as its
+/// direction and what it brought (weight · L), if the lobe drew one.
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
+pub fn sample_at_each<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    lobe: &Lobe<W::S>,
+    skip: Option<u32>,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+    each: &mut impl FnMut(VecOf<W>, Rgb),
+) -> (Parts, Option<(VecOf<W>, Rgb)>) {
     let mut parts = Parts {
-        direct: world.delta_lights(x, lobe, skip, rays),
-        single: world.sampled_nee(x, lobe, skip, true, s, rays),
+        direct: world.delta_lights_each(x, lobe, skip, rays, each),
+        single: world.sampled_nee_each(x, lobe, skip, true, s, rays, each),
         multiple: Rgb::ZERO,
     };
     let (w, weight, pdf) = lobe.sample(s);
-    if weight != Rgb::ZERO {
-        let (l, first) = radiance_path(world, x, w, skip, Some(pdf), settings, s, rays);
-        match first {
-            FirstEvent::Scatter => parts.multiple += weight * l,
-            FirstEvent::Surface | FirstEvent::Escape => parts.single += weight * l,
-        }
+    if weight == Rgb::ZERO {
+        return (parts, None);
     }
-    parts.scaled(prefactor)
+    let (l, first) = radiance_path(world, x, w, skip, Some(pdf), settings, s, rays);
+    let brought = weight * l;
+    match first {
+        FirstEvent::Scatter => parts.multiple += brought,
+        FirstEvent::Surface | FirstEvent::Escape => parts.single += brought,
+    }
+    (parts, Some((w, brought)))
 }
 
 /// The light a medium point `x` scatters back along −`travel` (one sample of
@@ -239,7 +259,6 @@ pub fn sample_at<W: World>(
 /// to x turns with x; holding it fixed leaves out ∫ K ∂_ωL·∇_x ω dm, which is
 /// log-divergent near x (∇_x ω ∝ 1/r) wherever f ≠ const and the light at m is
 /// anisotropic.
-#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn scattered_with_slope<W: World>(
     world: &W,
     x: VecOf<W>,
@@ -251,28 +270,16 @@ pub fn scattered_with_slope<W: World>(
 ) -> ScatteredSample<VecOf<W>> {
     let lobe = Lobe::Phase { phase, travel };
     let mut slope = [W::S::zero(); 3];
-    let mut add = |along: VecOf<W>, l: Rgb| {
+    let mut tap = |w: VecOf<W>, l: Rgb| {
+        let along = phase_log_slope::<W::S>(&phase, travel, w);
         for (c, v) in slope.iter_mut().zip([l.x, l.y, l.z]) {
             *c += along * v;
         }
     };
-    let mut tap = |w: VecOf<W>, c: Rgb| add(phase_log_slope::<W::S>(&phase, travel, w), c);
-    let mut parts = Parts {
-        direct: world.delta_lights_each(x, &lobe, None, rays, &mut tap),
-        single: world.sampled_nee_each(x, &lobe, None, true, s, rays, &mut tap),
-        multiple: Rgb::ZERO,
-    };
-    let (mut score, mut path) = (W::S::zero(), Rgb::ZERO);
-    let (w, weight, pdf) = lobe.sample(s);
-    if weight != Rgb::ZERO {
-        let (l, first) = radiance_path(world, x, w, None, Some(pdf), settings, s, rays);
-        match first {
-            FirstEvent::Scatter => parts.multiple += weight * l,
-            FirstEvent::Surface | FirstEvent::Escape => parts.single += weight * l,
-        }
-        score = phase_log_slope::<W::S>(&phase, travel, w);
-        path = weight * l;
-    }
+    let (parts, path) = sample_at_each(world, x, &lobe, None, settings, s, rays, &mut tap);
+    let (score, path) = path.map_or((W::S::zero(), Rgb::ZERO), |(w, brought)| {
+        (phase_log_slope::<W::S>(&phase, travel, w), brought)
+    });
     ScatteredSample {
         value: parts.total(),
         slope,

@@ -202,6 +202,16 @@ impl<S: Dim> ProbeRay<S> {
     }
 }
 
+/// A medium sample as the derivatives weigh it ([`LightField::medium_sample`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MediumSample<S: Dim> {
+    pub at: S::Vec,
+    /// L_s·Δt (σ_s included).
+    pub light: Rgb,
+    /// ∇_dir of `light` per channel (see [`ProbeRay::slopes`]).
+    pub slope: [S::Vec; 3],
+}
+
 /// The light field at one point.
 #[derive(Clone, Debug, Serialize)]
 pub struct LightField<S: Dim> {
@@ -235,6 +245,21 @@ impl<S: Dim> LightField<S> {
     /// Thickness Δt of medium sample i of `ray` (its weight in ∫ dt).
     pub fn sample_thickness(&self, ray: &ProbeRay<S>, i: usize) -> f64 {
         self.march.thickness_at(self.sample_depth(ray, i))
+    }
+
+    /// Medium sample `i` of ray `ray`: where it is, its L_s·Δt and that light's
+    /// direction gradient per channel times Δt (zero when not estimated); None
+    /// where the ray ended before shell i.
+    pub fn medium_sample(&self, ray: usize, i: usize) -> Option<MediumSample<S>> {
+        let r = &self.rays[ray];
+        let light = *r.samples.get(i)?;
+        let dt = self.sample_thickness(r, i);
+        let slope = r.slopes.get(i).map_or([S::zero(); 3], |g| g.map(|v| v * dt));
+        Some(MediumSample {
+            at: self.x + r.dir * self.sample_depth(r, i),
+            light: light * dt,
+            slope,
+        })
     }
 
     /// Where L_s leaves towards, for the derivative core.

@@ -12,7 +12,9 @@
 //!   from x.
 //! - Medium elements: at each shell i, the simplex of the i-th samples of its rays,
 //!   with thickness Δt. Where some ray stopped before shell i (it hit an occluder),
-//!   the element bridges that ray's end point and the others' samples.
+//!   the element bridges that ray's end point and the others' samples. An element
+//!   names its rays and shell; its samples stay in the light field
+//!   ([`LightField::medium_sample`]), where the derivatives evaluate each once.
 //!
 //! A bridging surface element carries the radiance of its vertex **farther from x**
 //! (Schwarzhaupt et al. 2012: what gets revealed or hidden as x moves);
@@ -71,17 +73,12 @@ pub struct Element<S: Dim> {
     /// tangent plane (a point on it, its normal), onto which the near vertices slide
     /// as x moves ([`super::slide`]).
     pub far_plane: Option<(S::Vec, S::Vec)>,
-    /// Each vertex's own sample: where it is evaluated, its radiance (for medium
-    /// elements L_s·Δt of that sample, zero where the ray ended before the shell) and
-    /// that radiance's gradient per channel with respect to the direction it is
-    /// seen from ([`ProbeRay::slopes`], times Δt; zero for surfaces).
-    pub samples: S::Simplex<Sample<S>>,
-}
-
-impl<S: Dim> crate::core::metric::Radiant for Element<S> {
-    fn radiance_mut(&mut self) -> &mut Rgb {
-        &mut self.radiance
-    }
+    /// The rays (indices into [`LightField::rays`]) whose ends or samples the
+    /// vertices are.
+    pub rays: S::Simplex<u32>,
+    /// Medium elements: the shell whose samples ([`LightField::medium_sample`]) the
+    /// vertices are (a ray that ended before it gives its end point instead).
+    pub shell: Option<u32>,
 }
 
 impl<S: Dim> Element<S> {
@@ -98,22 +95,21 @@ impl<S: Dim> Element<S> {
     }
 }
 
-/// A vertex's sample: where it is, its radiance, and the radiance's direction
-/// gradient per channel.
-pub type Sample<S> = (<S as Space>::Vec, Rgb, [<S as Space>::Vec; 3]);
-
 /// A vertex of an element: position, distance from x (for the rules), radiance,
-/// where its transmittance and phase are evaluated, and the radiance's direction
-/// gradient (medium samples only).
-type Vertex<S> = (<S as Space>::Vec, f64, Rgb, <S as Space>::Vec, [<S as Space>::Vec; 3]);
+/// and where its transmittance and phase are evaluated.
+type Vertex<S> = (<S as Space>::Vec, f64, Rgb, <S as Space>::Vec);
+
+/// Where an element's vertices come from: its rays, and the shell of a medium
+/// element.
+type Source<S> = (<S as Dim>::Simplex<u32>, Option<u32>);
 
 fn make<S: Dim>(
     x: S::Vec,
     v: S::Simplex<Vertex<S>>,
     rule: RadianceRule,
-    kind: ElementKind,
-    bridging: bool,
+    (kind, bridging): (ElementKind, bool),
     dir_measure: f64,
+    (rays, shell): Source<S>,
 ) -> Element<S> {
     let v = v.as_ref();
     let (anchor, radiance) = match rule {
@@ -133,7 +129,8 @@ fn make<S: Dim>(
         bridging,
         dir_measure,
         far_plane: None,
-        samples: S::simplex(|k| (v[k].3, v[k].2, v[k].4)),
+        rays,
+        shell,
     }
 }
 
@@ -159,8 +156,8 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
             // A hit next to a visibility boundary stands at the surface's true edge
             // (see `silhouette`), with the radiance its ray found.
             match r.hit.as_ref().and_then(|h| h.edge) {
-                Some(e) => (e, S::length(e - x), l, e, [S::zero(); 3]),
-                None => (p, d, l, p, [S::zero(); 3]),
+                Some(e) => (e, S::length(e - x), l, e),
+                None => (p, d, l, p),
             }
         })
         .collect();
@@ -213,7 +210,7 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
         // vertex's values are first order, and where vertices are near x their
         // angles move fast: the gradient grew as 1/d next to a surface at g = 0.99).
         let rule = if bridging { rule } else { RadianceRule::Average };
-        let mut e = make(x, v, rule, ElementKind::Surface, bridging, measure(t));
+        let mut e = make(x, v, rule, (ElementKind::Surface, bridging), measure(t), (*t, None));
         if bridging && rule == RadianceRule::Farther {
             let far = (0..S::DIM)
                 .max_by(|&i, &j| v.as_ref()[i].1.total_cmp(&v.as_ref()[j].1))
@@ -235,23 +232,21 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
                 continue;
             }
             let v: S::Simplex<Vertex<S>> = S::simplex(|k| {
-                let r = ray(k);
-                if present.as_ref()[k] {
-                    let d = lf.sample_depth(r, i);
-                    let p = x + r.dir * d;
-                    let dt = lf.sample_thickness(r, i);
-                    let slope = r.slopes.get(i).map_or([S::zero(); 3], |g| g.map(|v| v * dt));
-                    (p, d, r.samples[i] * dt, p, slope)
-                } else {
-                    let e = ends[t.as_ref()[k] as usize];
-                    (e.0, e.1, Rgb::ZERO, e.3, [S::zero(); 3])
+                let j = t.as_ref()[k] as usize;
+                match lf.medium_sample(j, i) {
+                    Some(m) => (m.at, lf.sample_depth(ray(k), i), m.light, m.at),
+                    None => {
+                        let e = ends[j];
+                        (e.0, e.1, Rgb::ZERO, e.3)
+                    }
                 }
             });
             if v.as_ref().iter().all(|e| e.2 == Rgb::ZERO) {
                 continue; // outside the medium region: nothing to carry
             }
             let bridging = !present.as_ref().iter().all(|&p| p);
-            let mut e = make(x, v, RadianceRule::Average, ElementKind::Medium, bridging, omega);
+            let kind = (ElementKind::Medium, bridging);
+            let mut e = make(x, v, RadianceRule::Average, kind, omega, (*t, Some(i as u32)));
             if bridging {
                 // See the module docs: the samples' sum over the vertex count.
                 let (mut c, mut l, mut m) = (S::zero(), Rgb::ZERO, 0.0);

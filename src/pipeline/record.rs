@@ -12,13 +12,13 @@
 //! proxy's own value is 4–8% low where emitters' outlines cross its elements: the
 //! farther-vertex rule darkens them.)
 
-use super::derivatives::{AwareSettings, PartDerivs, aware, plain_estimate, unaware};
+use super::derivatives::{AwareSettings, PartDerivs, aware_with_floor, plain_estimate, unaware};
 use super::dim::Dim;
 use super::path::Settings;
 use super::probe::{Outgoing, ProbeSettings, capture};
 use super::proxy::build;
 use super::world::World;
-use crate::core::metric::{CacheMethod, MetricParams, with_radiance_floor};
+use crate::core::metric::{CacheMethod, MetricParams};
 use crate::core::rng::mix64;
 use crate::core::space::Space;
 use crate::progress::{Cancelled, Progress};
@@ -127,14 +127,15 @@ pub fn compute_record<W: World>(
     let (mut parts, metric_hessians) = match cs.method {
         CacheMethod::Ours => {
             let elements = build(&lf, cs.aware.rule);
-            let floored = aware(&lf, &with_radiance_floor(&elements, cs.hessian_floor), &cs.aware);
+            let (parts, floored) = aware_with_floor(&lf, &elements, &cs.aware, cs.hessian_floor);
+            let floored = floored.unwrap_or(parts);
             let lum = |t: crate::core::taylor_rgb::TaylorRgb<W::S>| t.luminance().hess;
             let hessians = [
                 lum(floored.single + floored.multiple),
                 lum(floored.single),
                 lum(floored.multiple),
             ];
-            (aware(&lf, &elements, &cs.aware), hessians)
+            (parts, hessians)
         }
         CacheMethod::Jarosz08 => (unaware(&lf), [zero; 3]),
     };
