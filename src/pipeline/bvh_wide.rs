@@ -5,6 +5,10 @@
 //! node holds the boxes of four children as structure-of-arrays f32, so one ray
 //! tests them with a handful of 4-lane operations and loads half the bytes of an
 //! f64 binary node per child; the tree has half the levels of the binary one.
+//! Which children a ray meets is a bit mask computed without a branch per child,
+//! and the nearest child met is entered directly instead of through the stack
+//! (on one core: 2D forest closest hits 1.24×, occlusion 1.6×; 3D sphere closest
+//! hits 1.1×, see the commit).
 //!
 //! Conservative in f32: a box is never culled when the exact ray meets it. Bounds
 //! are rounded outwards (min down, max up); for each axis the origin is moved past
@@ -42,6 +46,14 @@ struct Entry {
     child: u32,
     count: u32,
     enter: f32,
+}
+
+impl Entry {
+    const NONE: Entry = Entry {
+        child: u32::MAX,
+        count: 0,
+        enter: f32::INFINITY,
+    };
 }
 
 #[derive(Clone, Debug, Default)]
@@ -206,23 +218,58 @@ impl WideBvh {
                     exit[k] = if t1 < exit[k] { t1 } else { exit[k] };
                 }
             }
-            // Push the children hit, nearest last (popped first).
-            let base = stack.len();
+            // Which children the ray meets, as bits: computed without a branch per
+            // child (a mispredicted branch per child cost more than the box tests).
+            let mut hit = 0u32;
             for k in 0..WIDTH {
-                if enter[k] <= exit[k] * SLACK {
-                    stack.push(Entry {
-                        child: n.child[k],
-                        count: n.count[k],
-                        enter: enter[k],
-                    });
-                    if ORDERED {
-                        let mut at = stack.len() - 1;
-                        while at > base && stack[at - 1].enter < stack[at].enter {
-                            stack.swap(at - 1, at);
-                            at -= 1;
+                hit |= ((enter[k] <= exit[k] * SLACK) as u32) << k;
+            }
+            // The nearest child met is taken next without a round trip through the
+            // stack; the others are pushed, nearest last (popped first).
+            if hit != 0 {
+                let mut first = hit.trailing_zeros() as usize;
+                if ORDERED {
+                    let mut rest = hit & (hit - 1);
+                    while rest != 0 {
+                        let k = rest.trailing_zeros() as usize;
+                        rest &= rest - 1;
+                        if enter[k] < enter[first] {
+                            first = k;
                         }
                     }
                 }
+                // The others, farthest first, so the nearest is popped first.
+                let mut others = [Entry::NONE; WIDTH - 1];
+                let mut m = 0;
+                let mut rest = hit & !(1 << first);
+                while rest != 0 {
+                    let k = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    others[m] = Entry {
+                        child: n.child[k],
+                        count: n.count[k],
+                        enter: enter[k],
+                    };
+                    if ORDERED {
+                        let mut at = m;
+                        while at > 0 && others[at - 1].enter < others[at].enter {
+                            others.swap(at - 1, at);
+                            at -= 1;
+                        }
+                    }
+                    m += 1;
+                }
+                others[..m].iter().for_each(|&e| stack.push(e));
+                if n.count[first] == 0 {
+                    node = n.child[first] as usize;
+                    continue;
+                }
+                // A leaf: popped next, so leaves are tested in one place.
+                stack.push(Entry {
+                    child: n.child[first],
+                    count: n.count[first],
+                    enter: enter[first],
+                });
             }
             // Next: the nearest pending inner node; leaves are tested as they come.
             loop {

@@ -105,19 +105,24 @@ fn moller_trumbore(
     if det == 0.0 {
         return None;
     }
-    let inv = 1.0 / det;
+    // The edge tests on the numerators, scaled by det's sign, and the division
+    // only for a triangle the ray meets: most a query tests are missed.
+    let sign = if det < 0.0 { -1.0 } else { 1.0 };
     let s = o - p0;
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
+    let u_num = s.dot(p);
+    let (u_s, det_s) = (u_num * sign, det * sign);
+    if !(0.0..=det_s).contains(&u_s) {
         return None;
     }
     let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
+    let v_num = d.dot(q);
+    let v_s = v_num * sign;
+    if v_s < 0.0 || u_s + v_s > det_s {
         return None;
     }
+    let inv = 1.0 / det;
     let t = e2.dot(q) * inv;
-    (t > t_min && t < t_max).then_some((t, u, v))
+    (t > t_min && t < t_max).then_some((t, u_num * inv, v_num * inv))
 }
 
 /// The two triangles of the parallelogram origin + s·u + t·v.
