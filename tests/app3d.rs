@@ -353,3 +353,60 @@ fn a_clicked_probe_lands_in_the_fog() {
         assert!(scene.medium.as_ref().unwrap().contains(x), "({u}, {v}) → {x}");
     }
 }
+
+#[test]
+fn the_error_map_measures_the_view_against_a_reference_of_the_same_camera() {
+    use volcache::app::error_map3d::reference_params;
+    use volcache::core::stats::luminance_errors;
+    use volcache::volume::render::render;
+    let path = room_file("errormap");
+    let mut a = app(&path);
+    a.volume_mut().set_method(Method3d::Ours);
+    a.volume_mut().display.error_map = true;
+    a.volume_mut().reference_spp = 16;
+    let mut h = harness(a);
+    step_until(&mut h, "the cached view and its reference", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let f = w.frame().unwrap().clone();
+    // The reference is the command line's path-traced image of the same camera and
+    // size, at the reference seed (never the judged image's seed).
+    let scene = w.doc.scene();
+    let rp = reference_params(scene, &w.params, 16);
+    assert_eq!((rp.width, rp.height, rp.spp), (16, 12, 16));
+    assert_ne!(rp.seed, f.image_params.seed);
+    let reference = render(scene, &rp, &Default::default()).unwrap();
+    assert_eq!(w.reference.current().unwrap().values, reference.values);
+    // The view shows the library's error map of ours against it, with its errors.
+    let want = luminance_errors(&f.image.values, &reference.values);
+    assert!(want.rmse > 0.0 && want.rmse.is_finite());
+    assert_eq!(w.error_shown.map(|e| e.0), Some(want));
+    let map = w.current_error_map(&f).unwrap();
+    assert_ne!(map.rgba, w.display_rgba(&f), "the error map, not the image");
+    // The medium part alone is measured on the medium parts.
+    h.state_mut().volume_mut().display.medium_only = true;
+    h.step();
+    let w = h.state().volume.as_ref().unwrap();
+    let medium = luminance_errors(&f.image.medium, &reference.medium);
+    assert_eq!(w.error_shown.map(|e| e.0), Some(medium));
+    // A camera move makes both stale: nothing is shown as the error of the new
+    // view until its image and its own reference arrive.
+    let starts = w.reference.starts;
+    let mut cam = w.doc.desc().camera.clone();
+    cam.position[0] += 0.3;
+    h.state_mut().volume_mut().doc.set_camera(cam).unwrap();
+    h.step();
+    let w = h.state().volume.as_ref().unwrap();
+    assert_eq!(w.reference.starts, starts + 1, "a new reference for the new camera");
+    assert!(w.error_shown.is_none(), "no error shown for the old camera");
+    step_until(&mut h, "the moved view and its reference", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let f = w.frame().unwrap();
+    let rp = reference_params(w.doc.scene(), &w.params, 16);
+    let reference = render(w.doc.scene(), &rp, &Default::default()).unwrap();
+    let medium = luminance_errors(&f.image.medium, &reference.medium);
+    assert_eq!(w.error_shown.map(|e| e.0), Some(medium));
+    // Off: the image again, and a reference for another state is not rendered.
+    h.state_mut().volume_mut().display.error_map = false;
+    h.step();
+    assert!(h.state().volume.as_ref().unwrap().error_shown.is_none());
+}

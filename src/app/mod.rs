@@ -36,6 +36,7 @@ pub mod compute;
 pub mod document;
 pub mod document3d;
 pub mod edit;
+pub mod error_map3d;
 pub mod field_method;
 pub mod frame_stats;
 pub mod history;

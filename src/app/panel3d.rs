@@ -179,6 +179,29 @@ impl Workbench3d {
             )
             .labelled_by(c.id);
         });
+        ui.checkbox(&mut d.error_map, "error map against a path-traced reference");
+        if d.error_map {
+            ui.horizontal(|ui| {
+                let l = ui.label("reference spp");
+                ui.add(egui::DragValue::new(&mut self.reference_spp).range(1..=1 << 16))
+                    .labelled_by(l.id);
+            });
+            match (self.reference.running(), self.reference.current()) {
+                (Some(j), _) => {
+                    ui.label(format!("{} — {:.0}%", j.stage(), 100.0 * j.fraction()));
+                }
+                (None, Some(r)) => {
+                    ui.label(format!(
+                        "reference: {} spp, {:.1} s, relative standard error {:.2}%",
+                        r.spp,
+                        r.seconds,
+                        100.0 * r.relative_std_error()
+                    ));
+                }
+                (None, None) => {}
+            }
+        }
+        let d = &mut self.display;
         ui.checkbox(&mut d.show_records, "draw the cache's records");
         ui.horizontal(|ui| {
             ui.label("coloured by");

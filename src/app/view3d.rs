@@ -97,7 +97,7 @@ impl Workbench3d {
         painter.rect_filled(avail, 0.0, Color32::from_gray(20));
         self.update_texture(ui.ctx());
         match &self.texture {
-            Some((tex, _, _)) => {
+            Some((tex, _, _, _)) => {
                 let uv = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
                 painter.image(tex.id(), rect, uv, Color32::WHITE);
             }
@@ -120,6 +120,7 @@ impl Workbench3d {
                 Color32::from_rgb(255, 210, 120),
             );
         }
+        self.draw_error_caption(&painter, rect);
         self.records_drawn = if self.display.show_records {
             self.draw_records(&ui.painter_at(rect), rect)
         } else {
@@ -131,25 +132,60 @@ impl Workbench3d {
 
     fn update_texture(&mut self, ctx: &egui::Context) {
         let Some(frame) = self.frame().cloned() else { return };
+        let map = self.current_error_map(&frame);
         let stale = match &self.texture {
-            Some((_, n, d)) => *n != self.frames || *d != self.display,
+            Some((_, n, d, e)) => *n != self.frames || *d != self.display || *e != map.is_some(),
             None => true,
         };
         if !stale {
             return;
         }
-        let rgba = self.display_rgba(&frame);
+        let key = (self.frames, self.display, map.is_some());
+        self.error_shown = map.as_ref().map(|m| (m.errors, m.range));
+        let rgba = match map {
+            Some(m) => m.rgba,
+            None => self.display_rgba(&frame),
+        };
         let image = egui::ColorImage::from_rgba_unmultiplied([frame.image.width, frame.image.height], &rgba);
         match &mut self.texture {
-            Some((t, n, d)) => {
+            Some((t, n, d, e)) => {
                 t.set(image, egui::TextureOptions::LINEAR);
-                (*n, *d) = (self.frames, self.display);
+                (*n, *d, *e) = key;
             }
             None => {
                 let t = ctx.load_texture("view3d", image, egui::TextureOptions::LINEAR);
-                self.texture = Some((t, self.frames, self.display));
+                self.texture = Some((t, key.0, key.1, key.2));
             }
         }
+    }
+
+    /// What the error map shows (its range and RMSE), or why it is not shown yet.
+    fn draw_error_caption(&self, painter: &egui::Painter, rect: Rect) {
+        if !self.display.error_map {
+            return;
+        }
+        let shown = self.texture.as_ref().is_some_and(|t| t.3);
+        let text = match (&self.error_shown, shown) {
+            (Some((e, (lo, hi))), true) => format!(
+                "|L − L_ref| {}, log colour {lo:.1e}…{hi:.1e}: RMSE {:.3e} (mean L_ref {:.3e})",
+                if self.display.medium_only {
+                    "of the medium part"
+                } else {
+                    "of the image"
+                },
+                e.rmse,
+                e.mean_reference
+            ),
+            _ if self.reference.running().is_some() => "error map: rendering the reference…".to_string(),
+            _ => "error map: at the view's full size, once the reference and the image are of this state".to_string(),
+        };
+        painter.text(
+            rect.left_bottom() + vec2(6.0, -6.0),
+            egui::Align2::LEFT_BOTTOM,
+            text,
+            egui::FontId::proportional(13.0),
+            Color32::from_rgb(255, 230, 160),
+        );
     }
 
     /// Draw the current frame's records; returns how many were drawn. They are

@@ -1,16 +1,22 @@
 //! The 3D mode's state and scheduling: the scene ([`Document3d`]), what the view
 //! renders ([`View3dParams`]) and how it is shown. [`Workbench3d::tick`] (no UI)
-//! takes in results and restarts the render job when the scene, the camera or the
-//! parameters change, cancelling the stale one; the widgets are in
+//! takes in results and restarts the render job (and the error map's reference,
+//! [`super::error_map3d`]) when the scene, the camera or the parameters change,
+//! cancelling the stale one; the widgets are in
 //! [`super::panel3d`] (side panel, status bar) and [`super::view3d`] (the image,
 //! camera motion, overlays).
 
 use super::document3d::Document3d;
+use super::error_map3d::{
+    DEFAULT_REFERENCE_SPP, ErrorMap, ReferenceKey, error_map, reference_params, spawn_reference3d,
+};
 use super::jobs::{Notify, Slot, no_notify};
 use super::probe3d::{Probe3d, Probe3dKey, Probe3dResult, spawn_probe3d};
 use super::render3d_job::{Frame3d, Method3d, View3dParams, spawn_render3d};
+use crate::core::stats::ImageErrors;
 use crate::figure::{auto_exposure, colormap::tonemap};
 use crate::output::image_field;
+use crate::volume::render::Rendered;
 use eframe::egui;
 use std::sync::Arc;
 
@@ -46,6 +52,8 @@ pub struct Display3d {
     pub exposure: f64,
     pub show_records: bool,
     pub record_shade: RecordShade,
+    /// Show the error against a reference of the same camera instead of the image.
+    pub error_map: bool,
 }
 
 pub struct Workbench3d {
@@ -60,10 +68,17 @@ pub struct Workbench3d {
     pub message: Option<(String, bool)>,
     pub(super) notify: Notify,
     pub(super) has_ctx: bool,
-    /// The image's texture and the frame and display it shows.
-    pub(super) texture: Option<(egui::TextureHandle, usize, Display3d)>,
-    /// Counts frames taken in, so the texture knows when to update.
+    /// The image's texture and the frame, display and error map it shows.
+    pub(super) texture: Option<(egui::TextureHandle, usize, Display3d, bool)>,
+    /// Counts frames and references taken in, so the texture knows when to update.
     pub(super) frames: usize,
+    /// The reference of the error map, for the current state (rendered while the
+    /// error map is asked for) and its samples per pixel.
+    pub reference: Slot<ReferenceKey, Arc<Rendered>>,
+    pub reference_spp: u32,
+    /// The errors of the error map on view (None when it is not shown) and its
+    /// colour range.
+    pub error_shown: Option<(ImageErrors, (f64, f64))>,
     /// Written once the view (and the probe) finished refining.
     pub ready_file: Option<std::path::PathBuf>,
     pub show_inspector: bool,
@@ -99,6 +114,7 @@ impl Workbench3d {
                 exposure: doc.desc().render.exposure,
                 show_records: true,
                 record_shade: RecordShade::Radius,
+                error_map: false,
             },
             doc,
             render: Slot::default(),
@@ -109,6 +125,9 @@ impl Workbench3d {
             has_ctx: false,
             texture: None,
             frames: 0,
+            reference: Slot::default(),
+            reference_spp: DEFAULT_REFERENCE_SPP,
+            error_shown: None,
             ready_file: None,
             show_inspector: true,
             show_proxy: true,
@@ -160,6 +179,9 @@ impl Workbench3d {
         }
         self.probe_job.update();
         self.compare.update();
+        if self.reference.update() {
+            self.frames += 1;
+        }
         let key = RenderKey {
             revision: self.doc.revision(),
             params: self.params.clone(),
@@ -175,6 +197,27 @@ impl Workbench3d {
         } else {
             self.probe_job.reset(true);
         }
+        let rp = reference_params(self.doc.scene(), &self.params, self.reference_spp);
+        let key = ReferenceKey {
+            revision: self.doc.revision(),
+            params: rp.clone(),
+        };
+        if self.display.error_map {
+            let (scene, notify) = (self.doc.scene().clone(), self.notify.clone());
+            self.reference.ensure(key, || spawn_reference3d(scene, rp, notify));
+        } else if self.reference.key() != Some(&key) && self.reference.running().is_some() {
+            // Nobody looks at it, and it is for another state: stop it.
+            self.reference.reset(false);
+        }
+    }
+
+    /// The error map of `frame` the view shows: asked for, the frame and the
+    /// reference both of the current state, and of one size (not a coarse level).
+    pub fn current_error_map(&self, frame: &Frame3d) -> Option<ErrorMap> {
+        if !self.display.error_map || !self.frame_is_current() {
+            return None;
+        }
+        error_map(&frame.image, self.reference.current()?, self.display.medium_only)
     }
 
     /// The latest frame, whichever state it was computed for.
@@ -189,7 +232,9 @@ impl Workbench3d {
 
     /// The refinement finished for the current state.
     pub fn settled(&self) -> bool {
-        self.render.is_done() && (self.probe.is_none() || self.probe_job.is_done())
+        self.render.is_done()
+            && (self.probe.is_none() || self.probe_job.is_done())
+            && (!self.display.error_map || self.reference.is_done())
     }
 
     pub fn set_method(&mut self, m: Method3d) {
@@ -245,7 +290,10 @@ impl Workbench3d {
     }
 
     pub fn busy(&self) -> bool {
-        self.render.running().is_some() || self.probe_job.running().is_some() || self.compare.running().is_some()
+        self.render.running().is_some()
+            || self.probe_job.running().is_some()
+            || self.compare.running().is_some()
+            || self.reference.running().is_some()
     }
 
     /// One frame of the 3D mode: side panel, status bar, inspector, view.
