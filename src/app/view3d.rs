@@ -132,14 +132,17 @@ impl Workbench3d {
 
     fn update_texture(&mut self, ctx: &egui::Context) {
         let Some(frame) = self.frame().cloned() else { return };
-        let map = self.current_error_map(&frame);
+        // Whether the map is shown is checked every UI frame; the map itself is
+        // made only when the texture changes.
+        let shown = self.error_map_shown(&frame);
         let stale = match &self.texture {
-            Some((_, n, d, e)) => *n != self.frames || *d != self.display || *e != map.is_some(),
+            Some((_, n, d, e)) => *n != self.frames || *d != self.display || *e != shown,
             None => true,
         };
         if !stale {
             return;
         }
+        let map = self.current_error_map(&frame);
         let key = (self.frames, self.display, map.is_some());
         self.error_shown = map.as_ref().map(|m| (m.errors, m.range));
         let rgba = match map {

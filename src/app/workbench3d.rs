@@ -214,10 +214,18 @@ impl Workbench3d {
     /// The error map of `frame` the view shows: asked for, the frame and the
     /// reference both of the current state, and of one size (not a coarse level).
     pub fn current_error_map(&self, frame: &Frame3d) -> Option<ErrorMap> {
-        if !self.display.error_map || !self.frame_is_current() {
+        if !self.error_map_shown(frame) {
             return None;
         }
         error_map(&frame.image, self.reference.current()?, self.display.medium_only)
+    }
+
+    /// Whether the view shows `frame`'s error map (a cheap test: no map is made).
+    pub fn error_map_shown(&self, frame: &Frame3d) -> bool {
+        let (w, h) = (frame.image.width, frame.image.height);
+        self.display.error_map
+            && self.frame_is_current()
+            && self.reference.current().is_some_and(|r| (r.width, r.height) == (w, h))
     }
 
     /// The latest frame, whichever state it was computed for.
