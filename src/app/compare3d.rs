@@ -9,8 +9,8 @@ use super::render3d_job::cache_settings;
 use crate::figure::image3d::{Image, error_panel};
 use crate::figure::{colormap::tonemap, shared_error_range};
 use crate::output::image_field;
+use crate::study::reference3d::reference_params;
 use crate::study::runs3d::{Run3d, compare3d, comparison_image};
-use crate::study::seeds::reference_seed;
 use crate::volume::render::{RenderParams, Rendered, render};
 use crate::volume::scene::Scene;
 use eframe::egui;
@@ -78,11 +78,7 @@ pub struct Compare3dResult {
 pub fn spawn_compare3d(scene: Arc<Scene>, params: Compare3dParams, notify: Notify) -> Job<Arc<Compare3dOutcome>> {
     Job::spawn("3D compare", Priority::Background, notify, move |r: &Reporter<_>| {
         let image = params.image(&scene);
-        let ref_params = RenderParams {
-            spp: params.ref_spp.max(1),
-            seed: reference_seed(params.seed),
-            ..image.clone()
-        };
+        let ref_params = reference_params(&image, params.ref_spp);
         r.stage(format!("reference: {} spp", ref_params.spp));
         let reference = render(&scene, &ref_params, r.progress())?;
         let settings = |m| cache_settings(&scene, image.clone(), m, None, params.rays, params.steps);

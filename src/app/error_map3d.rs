@@ -11,7 +11,6 @@ use crate::core::stats::{ImageErrors, luminance_errors};
 use crate::figure::error_map::error_field;
 use crate::figure::field_figure::{FieldStyle, field_to_rgba};
 use crate::output::image_field;
-use crate::study::seeds::reference_seed;
 use crate::volume::render::{RenderParams, Rendered, render};
 use crate::volume::scene::Scene;
 use std::sync::Arc;
@@ -31,10 +30,7 @@ pub struct ReferenceKey {
 /// The reference's image: the view's last level's size, `spp` samples, the
 /// reference seed (never the seed of the images it judges).
 pub fn reference_params(scene: &Scene, view: &View3dParams, spp: u32) -> RenderParams {
-    RenderParams {
-        seed: reference_seed(view.seed),
-        ..view.image(scene, 1.0, spp.max(1))
-    }
+    crate::study::reference3d::reference_params(&view.image(scene, 1.0, 1), spp)
 }
 
 /// Render the reference, sending it once done.

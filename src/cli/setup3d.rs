@@ -7,9 +7,8 @@ use super::render3d_cache::Cache3dArgs;
 use clap::Args;
 use std::path::PathBuf;
 use volcache::core::metric::CacheMethod;
-use volcache::study::reference3d::{ReferenceInfo3d, reference_image};
+use volcache::study::reference3d::{ReferenceInfo3d, reference_image, reference_params};
 use volcache::study::runs3d::{Run3d, cache_run, comparison_image};
-use volcache::study::seeds::reference_seed;
 use volcache::volume::cached::RecordMemo;
 use volcache::volume::render::{RenderParams, Rendered};
 use volcache::volume::scene::Scene;
@@ -54,11 +53,7 @@ pub fn setup3d(a: &Setup3dArgs, quiet: bool) -> anyhow::Result<Setup3d> {
     anyhow::ensure!(a.spp > 0 && a.ref_spp > 0, "--spp and --ref-spp must be at least 1");
     let res = a.res.map(|[w, h]| [w as usize, h as usize]);
     let image = comparison_image(&scene, res, a.spp, a.seed);
-    let ref_params = RenderParams {
-        spp: a.ref_spp,
-        seed: reference_seed(a.seed),
-        ..image.clone()
-    };
+    let ref_params = reference_params(&image, a.ref_spp);
     let (reference, ref_info) = reference_image(&scene, &ref_params, &a.ref_cache, |label| {
         ProgressUi::new(label, !quiet)
     })?;

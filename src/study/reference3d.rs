@@ -8,6 +8,16 @@ use crate::volume::scene::Scene;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The reference of `image`: the same scene view and size with `spp` samples and
+/// the reference seed of its seed (its own streams, never the judged image's).
+pub fn reference_params(image: &RenderParams, spp: u32) -> RenderParams {
+    RenderParams {
+        spp: spp.max(1),
+        seed: super::seeds::reference_seed(image.seed),
+        ..image.clone()
+    }
+}
+
 /// How converged the reference is.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ReferenceInfo3d {
