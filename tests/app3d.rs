@@ -228,7 +228,7 @@ fn editing_the_medium_is_validated_undone_and_saved_only_where_named() {
     let w = h.state_mut().volume_mut();
     assert!(w.render.starts > starts, "an edit restarts the render");
     w.doc
-        .set_camera(volcache::app::orbit::dolly(&w.doc.desc().camera, 0.5, 1.0))
+        .set_camera(volcache::volume::orbit::dolly(&w.doc.desc().camera, 0.5, 1.0))
         .unwrap();
     let cam = w.doc.desc().camera.clone();
     w.undo();

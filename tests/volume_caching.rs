@@ -10,7 +10,8 @@ use volcache::core::stats::ImageErrors;
 use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CachedRenderParams, RecordMemo, default_eps, march_reference, place, reconstruct, render_cached,
+    CacheSettings, CacheView, CachedRenderParams, RecordMemo, default_eps, march_reference, place, reconstruct,
+    render_cached,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
 use volcache::volume::render::{RenderParams, render};
@@ -200,7 +201,7 @@ fn records_file_round_trips() {
         assert_eq!(cache.records(), a.placement.caches[0].records());
         assert_eq!(back.valid_for.mismatch(&ValidFor::of(&s, &p)), None);
         let second_order = false;
-        let again = reconstruct(&s, &p, &cache, second_order, &Progress::new()).unwrap();
+        let again = reconstruct(&s, &p, CacheView::records(&cache), second_order, &Progress::new()).unwrap();
         assert_eq!(again.image.values, a.reconstruction.image.values);
         // Another image size, or another scene, is refused with the reason.
         let mut other = p.clone();

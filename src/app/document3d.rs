@@ -228,7 +228,7 @@ mod tests {
         let bad = d.edit("g", |s| s.medium.as_mut().unwrap().g = 1.5);
         assert!(bad.unwrap_err().to_string().contains("medium.g"));
         assert_eq!(d.desc().medium.as_ref().unwrap().g, 0.6);
-        let moved = super::super::orbit::orbit(&d.desc().camera, 0.5, 0.0);
+        let moved = crate::volume::orbit::orbit(&d.desc().camera, 0.5, 0.0);
         d.set_camera(moved.clone()).unwrap();
         assert!(d.undo(), "one gesture, one step");
         assert_eq!(d.desc().medium.as_ref().unwrap().g, g0);

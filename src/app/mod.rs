@@ -47,7 +47,6 @@ pub mod layout;
 pub mod mode;
 pub mod open_dialog;
 pub mod open_window;
-pub mod orbit;
 pub mod overlay;
 pub mod panel3d;
 pub mod panels;

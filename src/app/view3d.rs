@@ -4,12 +4,12 @@
 //! records drawn over the image as discs of their ellipsoids' mean radius,
 //! coloured as `figure compare3d` colours them.
 
-use super::orbit::{dolly, orbit, pan};
 use super::probe3d::Probe3d;
 use super::workbench3d::{RecordShade, Workbench3d};
 use crate::figure::ColorScale;
 use crate::volume::cached::RecordInfo;
 use crate::volume::camera::Camera;
+use crate::volume::orbit::{dolly, orbit, pan};
 use eframe::egui::{self, Color32, Pos2, Rect, Sense, Stroke, vec2};
 use glam::{DVec2, DVec3};
 use tiny_skia::{Paint, PathBuilder, Pixmap, Transform};

@@ -30,6 +30,9 @@ pub enum BenchCommand {
     /// 3D error vs time and vs cache count: ours, jarosz08 (record counts swept) and
     /// pt (spp swept), with the speedup of ours over jarosz08 at equal error.
     Tradeoff3d(super::bench_tradeoff3d::Tradeoff3dArgs),
+    /// 3D camera motion: a cache placed for one camera (with its records' moments
+    /// over ω_o, and without) against a fresh cache for each orbited camera.
+    Moments3d(super::bench_moments3d::Moments3dArgs),
 }
 
 #[derive(Args, Debug)]
@@ -97,6 +100,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<ExitCode> {
         BenchCommand::Derivatives(b) => super::bench_derivs::run(b),
         BenchCommand::Tradeoff(b) => super::bench_tradeoff::run(b),
         BenchCommand::Tradeoff3d(b) => super::bench_tradeoff3d::run(b),
+        BenchCommand::Moments3d(b) => super::bench_moments3d::run(b),
     }
 }
 

@@ -3,6 +3,7 @@
 mod app;
 mod bench;
 mod bench_derivs;
+mod bench_moments3d;
 mod bench_rays3d;
 mod bench_tradeoff;
 mod bench_tradeoff3d;

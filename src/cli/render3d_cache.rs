@@ -10,7 +10,8 @@ use volcache::output::write_json;
 use volcache::pipeline::record::Cached;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CachedRenderParams, Placement, RecordMemo, default_eps, place, place_with_count, reconstruct,
+    CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, place, place_with_count,
+    reconstruct,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
 use volcache::volume::render::{RenderParams, Rendered};
@@ -145,6 +146,7 @@ pub fn run_cached(
             Placement {
                 caches: vec![cache],
                 cached: vec![Cached::Scattered],
+                moments: vec![Vec::new()],
                 eps: file.eps,
                 query_points: file.query_points,
                 rays: file.placement_rays,
@@ -184,7 +186,7 @@ pub fn run_cached(
         return Ok((None, summary));
     }
     let second_order = cs.second_order && method == CacheMethod::Ours;
-    let r = reconstruct(scene, &cp, &placement.caches[0], second_order, progress)?;
+    let r = reconstruct(scene, &cp, CacheView::of(&placement), second_order, progress)?;
     summary.reconstruction_seconds = r.image.seconds;
     summary.reconstruction_rays = r.image.rays;
     summary.uncovered = r.uncovered;

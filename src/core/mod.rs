@@ -7,6 +7,7 @@ pub mod distance;
 pub mod element;
 pub mod equal_count;
 pub mod free_flight;
+pub mod harmonics;
 pub mod metric;
 pub mod mis;
 pub mod phase;

@@ -19,7 +19,6 @@ use crate::core::color::Rgb;
 use crate::core::distance::distance;
 use crate::core::element::{medium_form_factor_smoothed, medium_softening, near_distance};
 use crate::core::metric::hessian_radiance_floor;
-use crate::core::phase::{phase_taylor_fixed_direction, phase_taylor_out};
 use crate::core::space::Space;
 use crate::core::taylor::Taylor2;
 use crate::core::taylor_rgb::TaylorRgb;
@@ -89,7 +88,7 @@ pub fn direct_derivatives<S: Dim>(lf: &LightField<S>) -> TaylorRgb<S> {
             } => {
                 // I·T/r^{d−1}: 1/r (2D) or 1/r² (3D).
                 let r = S::length(position - x).max(1e-300);
-                let phase = phase_taylor_out::<S>(lf.g, x, position, lf.outgoing(), 0.0);
+                let phase = lf.angular_towards(x, position, 0.0);
                 let h = r.powi(-(S::DIM as i32 - 1));
                 let falloff = distance::<S>(x, position, 0.0).compose(h, -n * h / r, n * (n + 1.0) * h / (r * r));
                 let t = [0, 1, 2].map(|c| {
@@ -109,7 +108,7 @@ pub fn direct_derivatives<S: Dim>(lf: &LightField<S>) -> TaylorRgb<S> {
                 depth_grad,
                 transmittance,
             } => {
-                let f = phase_taylor_fixed_direction::<S>(lf.g, x, to_light, lf.outgoing());
+                let f = lf.angular_fixed(x, to_light);
                 let t = [0, 1, 2].map(|c| {
                     let tr = transmittance[c];
                     let sig = if tr > 0.0 && depth > 0.0 { -tr.ln() / depth } else { 0.0 };
@@ -155,7 +154,7 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
     if e.kind == ElementKind::Surface {
         // Where the phase integrates in closed form over the element (2D), it does:
         // a lobe narrower than the element (g → ±1) is then exact.
-        if let Some(pw) = S::phase_weighted_form(lf.g, e.v, lf.x, lf.outgoing()) {
+        if let Some(pw) = S::phase_weighted_form(lf.g, e.v, lf.x, lf.outgoing()).filter(|_| lf.moment.is_none()) {
             let v = e.v.as_ref();
             let t = match e.far_plane {
                 Some(plane) => slide::vertex_rule(lf, e, plane, soft, false),
@@ -174,7 +173,7 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
     if let Some(c) = medium_shell_contribution(lf, e, medium_clamp) {
         return c.mul_channels(times_sigma_s([Taylor2::constant(1.0); 3]));
     }
-    let phase = phase_taylor_out::<S>(lf.g, lf.x, e.anchor, lf.outgoing(), soft);
+    let phase = lf.angular_towards(lf.x, e.anchor, soft);
     let mut c = element_incident(lf, e).mul_channels(times_sigma_s([phase; 3]));
     if e.kind == ElementKind::Medium {
         // A bridging shell piece beyond the near field: its samples' light turns
@@ -218,8 +217,8 @@ fn near_field_phase<S: Dim>(lf: &LightField<S>, c: S::Vec, soft: f64, eps: f64, 
     let x = lf.x;
     let a = 2.0 * eps;
     let r = S::length(c - x);
-    let smooth = || phase_taylor_out::<S>(lf.g, x, c, lf.outgoing(), a.max(soft));
-    if lf.g == 0.0 || r >= 2.0 * a {
+    let smooth = || lf.angular_towards(x, c, a.max(soft));
+    if lf.angular_is_constant() || r >= 2.0 * a {
         return exact;
     }
     if r <= a {
@@ -318,7 +317,7 @@ fn medium_point<S: Dim>(
     let r = S::length(p - x);
     let t = transmittance_taylor_rgb::<S>(lf.sigma_t, x, p, soft);
     // The exact phase, once: the value's, and the kernels' beyond their near field.
-    let phase = phase_taylor_out::<S>(lf.g, x, p, lf.outgoing(), soft);
+    let phase = lf.angular_towards(x, p, soft);
     let local = lf.march.thickness_at(r);
     let kernel = |scale: f64| smoothed_kernel(lf, p, dir_measure, soft, phase, local, medium_clamp * scale);
     let (fine, even) = (lf.march.thickness_at(0.0), lf.march.even_step());
@@ -561,7 +560,6 @@ impl SampleShares {
 /// order only.
 pub fn unaware<S: Dim>(lf: &LightField<S>) -> PartDerivs<S> {
     let measure = lf.ray_measure();
-    let out = lf.outgoing();
     let (mut single, mut multiple) = ([Taylor2::<S>::zero(); 3], [Taylor2::<S>::zero(); 3]);
     let mut samples = Vec::new();
     for r in &lf.rays {
@@ -572,7 +570,7 @@ pub fn unaware<S: Dim>(lf: &LightField<S>) -> PartDerivs<S> {
                 .enumerate()
                 .map(|(i, l)| (lf.sample_depth(r, i), *l, lf.sample_thickness(r, i))),
         );
-        let f = phase_taylor_fixed_direction::<S>(lf.g, lf.x, r.dir, out);
+        let f = lf.angular_fixed(lf.x, r.dir);
         UnawareRay::<S> {
             sigma_t: lf.sigma_t,
             weight: lf.sigma_s * (f.value * measure),

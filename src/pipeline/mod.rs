@@ -16,6 +16,7 @@ pub mod directions;
 pub mod emitters;
 pub mod lobe;
 pub mod medium;
+pub mod moments;
 pub mod nee;
 pub mod path;
 pub mod placement;

@@ -65,6 +65,9 @@ pub struct Placement<S: Dim> {
     pub caches: Vec<RadianceCache<S>>,
     pub cached: Vec<Cached>,
     pub eps: f64,
+    /// Per cache, per record (in the cache's order): its moments over ω_o
+    /// (`super::moments`), empty without [`CacheSettings::moment_bands`].
+    pub moments: Vec<Vec<Vec<TaylorRgb<S>>>>,
     /// Query points visited.
     pub query_points: u64,
     /// Rays of the records' light fields plus the visibility tests of the checks.
@@ -96,11 +99,33 @@ pub fn place<W: World, Q: QuerySource<W::S>>(
     memo: &mut RecordMemo<W::S>,
     progress: &Progress,
 ) -> Result<Placement<W::S>, Cancelled> {
+    place_onto(world, source, cs, cached, None, memo, progress)
+}
+
+/// [`place`] starting from the records of an earlier placement of the same
+/// quantities (another camera's, whose records carry moments over ω_o): only the
+/// points they leave uncovered get new records, and the placement's rays and
+/// seconds are those of this walk alone.
+pub fn place_onto<W: World, Q: QuerySource<W::S>>(
+    world: &W,
+    source: &Q,
+    cs: &CacheSettings,
+    cached: &[Cached],
+    earlier: Option<Placement<W::S>>,
+    memo: &mut RecordMemo<W::S>,
+    progress: &Progress,
+) -> Result<Placement<W::S>, Cancelled> {
     let start = Instant::now();
     let metric = cs.metric(world.scale());
     let units = source.units();
     progress.start(units as u64);
-    let mut caches: Vec<RadianceCache<W::S>> = cached.iter().map(|_| Cache::new()).collect();
+    let (mut caches, mut moments) = match earlier {
+        Some(p) if p.cached == cached => (p.caches, p.moments),
+        _ => (
+            cached.iter().map(|_| Cache::new()).collect(),
+            vec![Vec::new(); cached.len()],
+        ),
+    };
     let (mut query_points, mut rays, mut records_seconds, mut capture_wall) = (0u64, 0u64, 0.0, 0.0);
     let uncovered = |caches: &[RadianceCache<W::S>], y, rays: &mut u64| -> Vec<usize> {
         (0..caches.len())
@@ -152,7 +177,9 @@ pub fn place<W: World, Q: QuerySource<W::S>>(
                     };
                     // A non-finite light field is refused by the cache: the point stays
                     // uncovered (reported by the reconstruction) rather than failing.
-                    let _ = caches[c].insert(record);
+                    if caches[c].insert(record).is_ok() {
+                        moments[c].push(d.moment_payload(cached[c]));
+                    }
                 }
             }
         }
@@ -161,6 +188,7 @@ pub fn place<W: World, Q: QuerySource<W::S>>(
     Ok(Placement {
         caches,
         cached: cached.to_vec(),
+        moments,
         eps: cs.eps,
         query_points,
         rays,
@@ -220,6 +248,39 @@ pub fn interpolate<W: World>(
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
+    interpolate_by(world, cache, y, second_order, scratch, rays, |i| {
+        cache.records()[i].value
+    })
+}
+
+/// [`interpolate`] from the records' moments over ω_o (`table`, as
+/// [`Placement::moments`]), combined with `weights` ([`super::moments::weights_towards`]
+/// of the ω_o at `y`).
+#[allow(clippy::too_many_arguments)] // interpolate's inputs and the moments'
+pub fn interpolate_moments<W: World>(
+    world: &W,
+    cache: &RadianceCache<W::S>,
+    table: &[Vec<TaylorRgb<W::S>>],
+    weights: &[f64],
+    y: <W::S as crate::core::space::Space>::Vec,
+    second_order: bool,
+    scratch: &mut Vec<(usize, f64)>,
+    rays: &mut u64,
+) -> Option<Rgb> {
+    interpolate_by(world, cache, y, second_order, scratch, rays, |i| {
+        super::moments::combine(&table[i], weights)
+    })
+}
+
+fn interpolate_by<W: World>(
+    world: &W,
+    cache: &RadianceCache<W::S>,
+    y: <W::S as crate::core::space::Space>::Vec,
+    second_order: bool,
+    scratch: &mut Vec<(usize, f64)>,
+    rays: &mut u64,
+    payload: impl Fn(usize) -> TaylorRgb<W::S>,
+) -> Option<Rgb> {
     cache.covering_where(y, scratch, |x| sees(world, x, y, rays));
     let total: f64 = scratch.iter().map(|&(_, w)| w).sum();
     if total <= 0.0 {
@@ -228,34 +289,25 @@ pub fn interpolate<W: World>(
     let records = cache.records();
     let mut out = Rgb::ZERO;
     for &(i, w) in scratch.iter() {
-        out += nonnegative_extrapolation(&records[i], y, second_order) * (w / total);
+        out += nonnegative_extrapolation(&payload(i), y - records[i].position, second_order) * (w / total);
     }
     Some(out.max(Rgb::ZERO))
 }
 
-/// A record's value extrapolated to `y`, per channel: where its Taylor expansion
+/// A record's payload extrapolated by `d`, per channel: where its Taylor expansion
 /// goes negative it has left the region it describes (it extrapolates across a
 /// peak or an edge it was not fitted to), and the next lower order stands in —
 /// first order for second, the record's value for first. Radiance is never
 /// negative, and a negative term clamped to zero afterwards left isolated black
 /// pixels next to lights (issue 16: up to 47 in a shaded-light scene).
-fn nonnegative_extrapolation<S: crate::pipeline::dim::Dim>(
-    r: &crate::core::cache::Record<S, crate::core::taylor_rgb::TaylorRgb<S>>,
-    y: S::Vec,
-    second_order: bool,
-) -> Rgb {
+fn nonnegative_extrapolation<S: crate::pipeline::dim::Dim>(value: &TaylorRgb<S>, d: S::Vec, second_order: bool) -> Rgb {
     use crate::core::cache::Interpolant;
-    let d = y - r.position;
-    let mut v = r.value.extrapolated(d, second_order);
+    let mut v = value.extrapolated(d, second_order);
     if v.min_element() >= 0.0 {
         return v;
     }
-    let first = if second_order {
-        r.value.extrapolated(d, false)
-    } else {
-        v
-    };
-    let value = r.value.value();
+    let first = if second_order { value.extrapolated(d, false) } else { v };
+    let value = value.value();
     for c in 0..3 {
         if v[c] < 0.0 {
             v[c] = if first[c] >= 0.0 { first[c] } else { value[c].max(0.0) };
@@ -282,7 +334,7 @@ mod extrapolation_tests {
         let red = Taylor2::new(1.0, DVec2::new(-0.5, 0.0), DMat2::ZERO);
         let green = Taylor2::new(1.0, DVec2::new(-3.0, 0.0), DMat2::ZERO);
         let blue = Taylor2::new(1.0, DVec2::ZERO, DMat2::from_diagonal(DVec2::splat(-10.0)));
-        let r = Record {
+        let r: Record<D2, TaylorRgb<D2>> = Record {
             position: DVec2::ZERO,
             value: TaylorRgb::<D2> {
                 channels: [red, green, blue],
@@ -292,8 +344,9 @@ mod extrapolation_tests {
         };
         let y = DVec2::new(0.5, 0.0);
         // Second order: red 0.75 kept; green 1 − 1.5 < 0 → value 1; blue 1 − 1.25 < 0 → first order 1.
-        assert_eq!(nonnegative_extrapolation(&r, y, true), Rgb::new(0.75, 1.0, 1.0));
-        assert_eq!(nonnegative_extrapolation(&r, y, false), Rgb::new(0.75, 1.0, 1.0));
-        assert_eq!(nonnegative_extrapolation(&r, DVec2::new(0.1, 0.0), true).x, 0.95);
+        let at = |y: DVec2, second: bool| nonnegative_extrapolation::<D2>(&r.value, y - r.position, second);
+        assert_eq!(at(y, true), Rgb::new(0.75, 1.0, 1.0));
+        assert_eq!(at(y, false), Rgb::new(0.75, 1.0, 1.0));
+        assert_eq!(at(DVec2::new(0.1, 0.0), true).x, 0.95);
     }
 }

@@ -231,6 +231,10 @@ pub struct LightField<S: Dim> {
     pub sigma_s: Rgb,
     pub sigma_t: Rgb,
     pub g: f64,
+    /// Which angular factor weights the light arriving at x: the phase towards
+    /// ω_o (None), or basis function k of the harmonic moments over ω_o (Some(k);
+    /// `super::moments`).
+    pub moment: Option<usize>,
     /// Ray-casting queries spent.
     pub cost_rays: u64,
     pub seconds: f64,
@@ -431,6 +435,7 @@ pub fn capture<W: World>(
         sigma_s: at_x.map_or(Rgb::ZERO, |m| m.sigma_s),
         sigma_t: sigma_t_x,
         g: at_x.map_or(0.0, |m| m.g()),
+        moment: None,
         cost_rays: cost + c,
         seconds: start.elapsed().as_secs_f64(),
     })

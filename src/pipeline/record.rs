@@ -14,6 +14,7 @@
 
 use super::derivatives::{AwareSettings, PartDerivs, aware_with_floor, plain_estimate, unaware};
 use super::dim::Dim;
+use super::moments::moment_derivs;
 use super::path::Settings;
 use super::probe::{Outgoing, ProbeSettings, capture};
 use super::proxy::build;
@@ -43,6 +44,9 @@ pub struct CacheSettings {
     pub hessian_floor: f64,
     /// Seed of the records' light fields.
     pub seed: u64,
+    /// Also store each record's harmonic moments over ω_o up to this band
+    /// (`super::moments`), so that the cache serves any camera.
+    pub moment_bands: Option<usize>,
 }
 
 impl CacheSettings {
@@ -62,6 +66,7 @@ impl CacheSettings {
             second_order: false,
             hessian_floor: 0.01,
             seed: 1,
+            moment_bands: None,
         }
     }
 
@@ -87,6 +92,9 @@ pub struct RecordData<S: Dim> {
     /// Luminance Hessians the metric uses (with the radiance floor; zero for
     /// jarosz08), per [`Cached`] quantity.
     pub metric_hessians: [S::Mat; 3],
+    /// Per basis function of the moments over ω_o, value and derivatives per part
+    /// (empty unless asked for: [`CacheSettings::moment_bands`]).
+    pub moments: Vec<PartDerivs<S>>,
     pub rays: u64,
     /// Wall time of the capture and derivatives.
     pub seconds: f64,
@@ -100,6 +108,16 @@ impl<S: Dim> RecordData<S> {
             Cached::Single => self.parts.single,
             Cached::Multiple => self.parts.multiple,
         }
+    }
+
+    /// The moments of a cached quantity (empty without moments).
+    pub fn moment_payload(&self, q: Cached) -> Vec<crate::core::taylor_rgb::TaylorRgb<S>> {
+        let of = |p: &PartDerivs<S>| match q {
+            Cached::Scattered => p.single + p.multiple,
+            Cached::Single => p.single,
+            Cached::Multiple => p.multiple,
+        };
+        self.moments.iter().map(of).collect()
     }
 
     pub fn metric_hessian(&self, q: Cached) -> S::Mat {
@@ -122,11 +140,14 @@ pub fn compute_record<W: World>(
         slopes: cs.probe.slopes && cs.method == CacheMethod::Ours,
         ..cs.probe
     };
-    let lf = capture(world, x, out, &probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;
+    let mut lf = capture(world, x, out, &probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;
     let zero = <W::S as Space>::zero_mat();
+    let elements = match cs.method {
+        CacheMethod::Ours => build(&lf, cs.aware.rule),
+        CacheMethod::Jarosz08 => Vec::new(),
+    };
     let (mut parts, metric_hessians) = match cs.method {
         CacheMethod::Ours => {
-            let elements = build(&lf, cs.aware.rule);
             let (parts, floored) = aware_with_floor(&lf, &elements, &cs.aware, cs.hessian_floor);
             let floored = floored.unwrap_or(parts);
             let lum = |t: crate::core::taylor_rgb::TaylorRgb<W::S>| t.luminance().hess;
@@ -148,9 +169,14 @@ pub fn compute_record<W: World>(
             ch.value = value[c];
         }
     }
+    let moments = match cs.moment_bands {
+        Some(bands) => moment_derivs(&mut lf, cs.method, &elements, &cs.aware, bands),
+        None => Vec::new(),
+    };
     Ok(RecordData {
         parts,
         metric_hessians,
+        moments,
         rays: lf.cost_rays,
         seconds: start.elapsed().as_secs_f64(),
     })

@@ -24,7 +24,6 @@ use super::probe::LightField;
 use super::proxy::Element;
 use super::silhouette::BRIDGE_RATIO;
 use crate::core::color::Rgb;
-use crate::core::phase::{Outgoing, hg_of_mu, phase_taylor_out};
 use crate::core::taylor::Taylor2;
 use crate::core::transmittance::transmittance_taylor_rgb;
 
@@ -46,12 +45,7 @@ fn phase_transmittance_at<S: Dim>(lf: &LightField<S>, x: S::Vec, y: S::Vec, phas
     if !phase {
         return t.to_array();
     }
-    let u = (y - x) / r;
-    let w = match lf.outgoing() {
-        Outgoing::Direction(w) => w / S::length(w),
-        Outgoing::TowardsPoint(eye) => (eye - x) / S::length(eye - x),
-    };
-    let f = hg_of_mu::<S>(lf.g, -S::dot(u, w)).0;
+    let f = lf.angular_at(x, y);
     [f * t.x, f * t.y, f * t.z]
 }
 
@@ -73,7 +67,7 @@ pub fn vertex_rule<S: Dim>(
         if !phase {
             return t;
         }
-        let f = phase_taylor_out::<S>(lf.g, x, a, lf.outgoing(), soft);
+        let f = lf.angular_towards(x, a, soft);
         t.map(|t| t * f)
     };
     let mut sum = [Taylor2::zero(); 3];

@@ -27,6 +27,7 @@ pub mod field_runs;
 pub mod gradient_summary;
 pub mod gradients;
 pub mod light_field_derivs;
+pub mod moments3d;
 pub mod reference2d;
 pub mod reference3d;
 pub mod runs3d;

@@ -14,7 +14,7 @@
 //! also decides the records' methods and values) are the window's camera samples'
 //! march points ([`super::camera_march`]), pixel by pixel in a coarse-to-fine order.
 
-pub use super::cached_params::{CachedRenderParams, Placement, RadianceCache, RecordInfo, RecordMemo};
+pub use super::cached_params::{CacheView, CachedRenderParams, Placement, RadianceCache, RecordInfo, RecordMemo};
 use super::camera::Camera;
 use super::camera_march::CameraRay;
 pub use super::reconstruct::{Reconstruction, march_reference, reconstruct};
@@ -25,7 +25,9 @@ use crate::core::metric::CacheMethod;
 use crate::core::rng::mix64;
 use crate::core::space::D3;
 pub use crate::pipeline::placement::CountError;
-use crate::pipeline::placement::{QueryPoint, QuerySource, place as place_points, place_with_count as place_count};
+use crate::pipeline::placement::{
+    QueryPoint, QuerySource, place as place_points, place_onto as place_points_onto, place_with_count as place_count,
+};
 use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::Cached;
 use crate::progress::{Cancelled, Progress};
@@ -114,6 +116,22 @@ pub fn place(
     )
 }
 
+/// Place records over every query point of the window, starting from `earlier`
+/// (records placed for another camera of the same scene): with moments over ω_o
+/// (`CacheSettings::moment_bands`) they serve this camera too, and only the points
+/// they leave uncovered get new records. The placement's cost is this walk's.
+pub fn place_onto(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cs: &CacheSettings,
+    earlier: Placement,
+    memo: &mut RecordMemo,
+    progress: &Progress,
+) -> Result<Placement, Cancelled> {
+    let source = CameraSamples::new(scene, params);
+    place_points_onto(scene, &source, cs, &[Cached::Scattered], Some(earlier), memo, progress)
+}
+
 /// Equal-count mode: search ε until placement makes `target` records (±1%),
 /// reusing memoised light fields.
 pub fn place_with_count(
@@ -160,7 +178,7 @@ pub fn render_cached(
         None => place(scene, params, cs, memo, progress)?,
     };
     let second_order = cs.second_order && cs.method == CacheMethod::Ours;
-    let reconstruction = reconstruct(scene, params, &placement.caches[0], second_order, progress)?;
+    let reconstruction = reconstruct(scene, params, CacheView::of(&placement), second_order, progress)?;
     Ok(CachedRender {
         placement,
         reconstruction,

@@ -6,6 +6,7 @@
 use super::render::RenderParams;
 use super::scene::Scene;
 use crate::core::space::D3;
+use crate::core::taylor_rgb::TaylorRgb;
 use serde::Serialize;
 
 pub type RecordMemo = crate::pipeline::placement::RecordMemo<D3>;
@@ -32,6 +33,33 @@ impl CachedRenderParams {
             image: RenderParams::from_scene(scene),
             march_step: scene.scale / 128.0,
             surface_paths: 4,
+        }
+    }
+}
+
+/// What a reconstruction reads: the records, and their moments over ω_o when they
+/// carry them (`pipeline::moments`; then L_s is combined for each camera ray's ω_o
+/// rather than read as stored for the camera that placed them).
+#[derive(Clone, Copy, Debug)]
+pub struct CacheView<'a> {
+    pub cache: &'a RadianceCache,
+    /// Per record, its moments (all of bands 0..=L), if every record has them.
+    pub moments: Option<&'a [Vec<TaylorRgb<D3>>]>,
+}
+
+impl<'a> CacheView<'a> {
+    /// The records alone, as stored.
+    pub fn records(cache: &'a RadianceCache) -> Self {
+        CacheView { cache, moments: None }
+    }
+
+    /// A placement's first cache, with its moments when it has them.
+    pub fn of(placement: &'a Placement) -> Self {
+        let table = &placement.moments[0];
+        let complete = table.len() == placement.caches[0].len() && table.iter().all(|m| !m.is_empty());
+        CacheView {
+            cache: &placement.caches[0],
+            moments: (complete && !table.is_empty()).then_some(table.as_slice()),
         }
     }
 }

@@ -15,6 +15,7 @@ pub mod camera_march;
 pub mod lights;
 pub mod medium;
 pub mod mesh;
+pub mod orbit;
 pub mod reconstruct;
 pub mod records_file;
 pub mod render;

@@ -6,15 +6,17 @@
 //! the direct part sampled at the point) or is path traced. Sharing the camera rays,
 //! march points and surface samples, the two differ only by the cache's error.
 
-use super::cached_params::{CachedRenderParams, RadianceCache};
+use super::cached_params::{CacheView, CachedRenderParams};
 use super::camera_march::CameraRay;
 use super::lights::Lobe;
 use super::render::{Rendered, camera};
 use super::scene::Scene;
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::{Sampler, mix64};
+use crate::core::space::D3;
+use crate::pipeline::moments::weights_towards;
 use crate::pipeline::path::{radiance_leaving, sample_at};
-use crate::pipeline::placement::interpolate;
+use crate::pipeline::placement::{interpolate, interpolate_moments};
 use crate::pipeline::world::World;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
@@ -32,18 +34,33 @@ pub struct Reconstruction {
 
 /// Render the window from the cache: per camera sample, T L_o at the first surface
 /// (path traced) plus Σ_n T(t_n) Δ [σ_s·direct + cached L_s] over its march points.
+/// Records with moments over ω_o give L_s towards each camera ray's own ω_o.
 pub fn reconstruct(
     scene: &Scene,
     params: &CachedRenderParams,
-    cache: &RadianceCache,
+    view: CacheView,
     second_order: bool,
     progress: &Progress,
 ) -> Result<Reconstruction, Cancelled> {
-    // Each row's clone of the closure has its own scratch buffer.
+    // Each row's clone of the closure has its own scratch buffer, and the moments'
+    // weights of the ray it is on (ω_o is the same along a camera ray).
     let mut scratch: Vec<(usize, f64)> = Vec::new();
+    let mut weights: (DVec3, Vec<f64>) = (DVec3::ZERO, Vec::new());
+    let g = scene.medium.as_ref().map_or(0.0, |m| m.g());
+    let cache = view.cache;
     march_image(scene, params, progress, move |p, lobe, sigma_s, s, rays| {
         let direct = scene.direct_part(p, lobe, s, rays) * sigma_s;
-        interpolate(scene, cache, p, second_order, &mut scratch, rays).map(|c| direct + c)
+        let cached = match (view.moments, lobe) {
+            (Some(table), Lobe::Phase { travel, .. }) => {
+                if weights.0 != *travel || weights.1.is_empty() {
+                    let bands = (table[0].len() as f64).sqrt().round() as usize - 1;
+                    weights = (*travel, weights_towards::<D3>(g, bands, -*travel));
+                }
+                interpolate_moments(scene, cache, table, &weights.1, p, second_order, &mut scratch, rays)
+            }
+            _ => interpolate(scene, cache, p, second_order, &mut scratch, rays),
+        };
+        cached.map(|c| direct + c)
     })
 }
 

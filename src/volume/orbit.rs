@@ -1,4 +1,4 @@
-//! Camera motion in the 3D view, on the scene file's camera block (position,
+//! Camera motion (the app's 3D view, `bench moments3d`), on the scene file's camera block (position,
 //! look_at, up, fov): orbit about the look-at point, pan in the image plane, dolly
 //! towards the look-at point. Pure functions, so the view's mouse handling stays
 //! thin and the motions are tested without a window.
