@@ -365,3 +365,23 @@ fn open_fog_places_records_where_the_camera_sees_and_stays_unbiased() {
     eprintln!("medium part: march − pt = {mu:.3e} ± {se:.3e} (mean {mean:.3e})");
     assert!(mu.abs() < 4.0 * se + 0.01 * mean, "{mu} ± {se} of {mean}");
 }
+
+/// A memo shared by placements of two image sizes (the app's half-size preview,
+/// then its full size) gives the full size the same records and image as a fresh
+/// memo: light fields are memoised per point of one image, never handed to the
+/// pixel of the same index in another size.
+#[test]
+fn a_memo_shared_across_image_sizes_changes_nothing() {
+    let s = load("fog_box.json");
+    let cs = settings(CacheMethod::Ours, &s, 128, 6, 1);
+    let (small, full) = (params(&s, 10, 10, 1, 32.0), params(&s, 20, 20, 1, 32.0));
+    let fresh = render_cached(&s, &full, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
+    let mut memo = RecordMemo::new();
+    render_cached(&s, &small, &cs, None, &mut memo, &Progress::new()).unwrap();
+    let shared = render_cached(&s, &full, &cs, None, &mut memo, &Progress::new()).unwrap();
+    assert_eq!(
+        shared.placement.caches[0].records(),
+        fresh.placement.caches[0].records()
+    );
+    assert_eq!(shared.reconstruction.image.values, fresh.reconstruction.image.values);
+}

@@ -52,6 +52,8 @@ struct CameraSamples<'a> {
     params: &'a CachedRenderParams,
     /// Full-image pixel indices in placement order.
     order: Vec<usize>,
+    /// The image's width and height, 16 bits each, as the top of the memo's keys.
+    size_key: u128,
 }
 
 impl<'a> CameraSamples<'a> {
@@ -68,6 +70,7 @@ impl<'a> CameraSamples<'a> {
             cam: camera(scene, p.width, p.height),
             params,
             order,
+            size_key: (((p.width & 0xFFFF) << 16) | (p.height & 0xFFFF)) as u128,
         }
     }
 }
@@ -85,7 +88,10 @@ impl QuerySource<D3> for CameraSamples<'_> {
             for (i, t, _) in ray.march(self.params.march_step) {
                 let (p, k, i) = (pixel as u64, sample as u64, i as u64);
                 out.push(QueryPoint {
-                    key: ((p as u128) << 64) | ((k as u128) << 32) | i as u128,
+                    // The image's size is part of the key: a memo shared by placements
+                    // of two sizes (the app's half-size preview, then its full size)
+                    // must not hand one size's light field to the other's pixel.
+                    key: (self.size_key << 96) | ((p as u128) << 64) | ((k as u128) << 32) | i as u128,
                     id: mix64((p << 32) | k) ^ i,
                     y: ray.at(t),
                 });
