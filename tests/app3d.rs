@@ -410,3 +410,56 @@ fn the_error_map_measures_the_view_against_a_reference_of_the_same_camera() {
     h.step();
     assert!(h.state().volume.as_ref().unwrap().error_shown.is_none());
 }
+
+/// With "keep records when the camera moves" a cached view starts a moved camera
+/// from the previous camera's records (their moments over ω_o) and says so; any
+/// other edit, or the option off, places afresh.
+#[test]
+fn a_camera_move_keeps_the_records_with_moments() {
+    let path = room_file("moments");
+    let mut h = harness(app(&path));
+    let frame = |h: &Harness<'_, App>| h.state().volume.as_ref().unwrap().frame().unwrap().clone();
+    let orbit = |h: &mut Harness<'_, App>, yaw: f64| {
+        let w = h.state_mut().volume_mut();
+        let cam = volcache::volume::orbit::orbit(&w.doc.desc().camera, yaw, 0.0);
+        w.doc.set_camera(cam).unwrap();
+        h.step();
+    };
+    {
+        let w = h.state_mut().volume_mut();
+        w.set_method(Method3d::Ours);
+        w.params.moment_bands = Some(2);
+    }
+    h.step();
+    step_until(&mut h, "the first camera's cache", settled);
+    let first = frame(&h);
+    assert_eq!((first.method, first.carried), (Method3d::Ours, 0));
+    let placed = first.records.len();
+    assert!(placed > 0);
+    orbit(&mut h, 0.3);
+    step_until(&mut h, "the moved camera's cache", settled);
+    let moved = frame(&h);
+    assert_eq!(moved.carried, placed, "the first camera's records were carried over");
+    assert!(moved.records.len() >= placed);
+    assert!(moved.image.values.iter().all(|v| v.is_finite()));
+    let w = h.state().volume.as_ref().unwrap();
+    assert!(w.command().unwrap().contains("records from earlier cameras"));
+    // An edit of the medium drops them.
+    h.state_mut()
+        .volume_mut()
+        .doc
+        .edit("σ_s", |d| {
+            d.medium.as_mut().unwrap().sigma_s = volcache::volume::scene_desc::Color([0.3; 3])
+        })
+        .unwrap();
+    h.step();
+    step_until(&mut h, "the edited scene's cache", settled);
+    assert_eq!(frame(&h).carried, 0, "an edit places afresh");
+    // Without moments a camera move places afresh too.
+    h.state_mut().volume_mut().params.moment_bands = None;
+    h.step();
+    step_until(&mut h, "the cache without moments", settled);
+    orbit(&mut h, -0.3);
+    step_until(&mut h, "the moved camera without moments", settled);
+    assert_eq!(frame(&h).carried, 0);
+}

@@ -3,8 +3,9 @@
 //! whose validation is the scene loader's; a refused edit shows its error.
 
 use super::document3d::SHIPPED_SCENES_3D;
-use super::render3d_job::Method3d;
+use super::render3d_job::{DEFAULT_MOMENT_BANDS, Method3d};
 use super::workbench3d::{RecordShade, Workbench3d};
+use crate::core::harmonics::MAX_BANDS;
 use crate::volume::scene_desc::{Color, LightDesc, SceneDesc};
 use eframe::egui;
 
@@ -163,6 +164,23 @@ impl Workbench3d {
                 if custom != p.eps.is_some() {
                     p.eps = custom.then(|| self.render.current().map_or(1e-3, |f| f.eps.max(1e-9)));
                 }
+                // Records with moments over ω_o serve any camera: a camera move then
+                // places only where the earlier records leave points uncovered.
+                let mut keep = p.moment_bands.is_some();
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut keep, "keep records when the camera moves")
+                        .on_hover_text(
+                            "Records store their moments over the outgoing direction (spherical harmonics \
+                             to band L, (L+1)² derivative passes each) so that another camera reads them \
+                             for its own directions; truncation error ~ g^(L+1).",
+                        );
+                    if let Some(b) = &mut p.moment_bands {
+                        ui.add(egui::DragValue::new(b).range(0..=MAX_BANDS).prefix("L = "));
+                    }
+                });
+                if keep != p.moment_bands.is_some() {
+                    p.moment_bands = keep.then_some(DEFAULT_MOMENT_BANDS);
+                }
             }
         }
     }
@@ -315,10 +333,10 @@ impl Workbench3d {
                     img.spp,
                     img.seconds,
                     img.rays as f64 * 1e-6,
-                    if f.records.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" · {} records (ε = {:.3e})", f.records.len(), f.eps)
+                    match (f.records.len(), f.carried) {
+                        (0, _) => String::new(),
+                        (n, 0) => format!(" · {n} records (ε = {:.3e})", f.eps),
+                        (n, c) => format!(" · {n} records, {c} from earlier cameras (ε = {:.3e})", f.eps),
                     }
                 ));
                 if let Some(c) = self.command()

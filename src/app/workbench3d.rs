@@ -16,9 +16,23 @@ use super::render3d_job::{Frame3d, Method3d, View3dParams, spawn_render3d};
 use crate::core::stats::ImageErrors;
 use crate::figure::{auto_exposure, colormap::tonemap};
 use crate::output::image_field;
+use crate::volume::cached::Placement;
 use crate::volume::render::Rendered;
 use eframe::egui;
 use std::sync::Arc;
+
+/// The scene description with a fixed camera: what a cache with moments over ω_o
+/// must share with the state it is reused in.
+fn without_camera(desc: &crate::volume::scene_desc::SceneDesc) -> crate::volume::scene_desc::SceneDesc {
+    let mut d = desc.clone();
+    d.camera = crate::volume::scene_desc::CameraDesc {
+        position: [0.0; 3],
+        look_at: [0.0; 3],
+        up: [0.0; 3],
+        fov_deg: 0.0,
+    };
+    d
+}
 
 /// The default width of the view's image, pixels (the aspect is the scene's).
 pub const DEFAULT_VIEW_WIDTH: usize = 200;
@@ -99,6 +113,9 @@ pub struct Workbench3d {
     pub(super) light_field_tex: Option<(Arc<Probe3dResult>, bool, u32, egui::TextureHandle)>,
     /// Record discs the view drew last frame (tests check the overlay through it).
     pub records_drawn: usize,
+    /// The last full-size cache with moments over ω_o, and the scene (camera
+    /// aside) and view parameters it was placed for: a camera move starts from it.
+    kept: Option<(crate::volume::scene_desc::SceneDesc, View3dParams, Arc<Placement>)>,
     stats: super::frame_stats::FrameStats,
 }
 
@@ -132,6 +149,7 @@ impl Workbench3d {
             show_inspector: true,
             show_proxy: true,
             records_drawn: 0,
+            kept: None,
             records_tex: None,
             light_field_tex: None,
             view_rect: None,
@@ -186,8 +204,11 @@ impl Workbench3d {
             revision: self.doc.revision(),
             params: self.params.clone(),
         };
+        self.keep_moments(&key);
         let (scene, params, notify) = (self.doc.scene().clone(), self.params.clone(), self.notify.clone());
-        self.render.ensure(key, || spawn_render3d(scene, params, notify));
+        let earlier = self.earlier_records();
+        self.render
+            .ensure(key, || spawn_render3d(scene, params, earlier, notify));
         if let Some(p) = &self.probe {
             let key = p.key(self.doc.revision(), &self.params);
             let (scene, probe, notify) = (self.doc.scene().clone(), p.clone(), self.notify.clone());
@@ -209,6 +230,29 @@ impl Workbench3d {
             // Nobody looks at it, and it is for another state: stop it.
             self.reference.reset(false);
         }
+    }
+
+    /// Keep the current state's finished full-size cache when its records carry
+    /// moments over ω_o.
+    /// (`key` is the current state's: the slot's frame may still be an older
+    /// state's until the next job starts.)
+    fn keep_moments(&mut self, key: &RenderKey) {
+        if self.params.moment_bands.is_none() || self.render.key() != Some(key) {
+            return;
+        }
+        let Some(f) = self.render.current() else { return };
+        if let (true, Some(p)) = (f.level == f.levels, &f.placement) {
+            self.kept = Some((without_camera(self.doc.desc()), self.params.clone(), p.clone()));
+        }
+    }
+
+    /// The kept cache, if it was placed for this scene and these parameters from
+    /// another camera (a camera move keeps the records; any other change drops them).
+    pub fn earlier_records(&self) -> Option<Arc<Placement>> {
+        let (desc, params, p) = self.kept.as_ref()?;
+        let same =
+            self.params.moment_bands.is_some() && *params == self.params && *desc == without_camera(self.doc.desc());
+        same.then(|| p.clone())
     }
 
     /// The error map of `frame` the view shows: asked for, the frame and the
@@ -292,6 +336,12 @@ impl Workbench3d {
             c += &format!(
                 " --eps {:e} --rays {} --steps {}",
                 f.eps, self.params.rays, self.params.steps
+            );
+        }
+        if f.carried > 0 {
+            c += &format!(
+                "  # the view reused {} records from earlier cameras; this command places afresh",
+                f.carried
             );
         }
         Some(c)

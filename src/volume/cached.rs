@@ -183,6 +183,30 @@ pub fn render_cached(
         Some(n) => place_with_count(scene, params, cs, n, memo, progress)?,
         None => place(scene, params, cs, memo, progress)?,
     };
+    Ok(reconstructed(scene, params, cs, placement, progress)?)
+}
+
+/// [`place_onto`] `earlier` (another camera's records, with moments over ω_o) and
+/// reconstruct.
+pub fn render_cached_onto(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cs: &CacheSettings,
+    earlier: Placement,
+    memo: &mut RecordMemo,
+    progress: &Progress,
+) -> Result<CachedRender, Cancelled> {
+    let placement = place_onto(scene, params, cs, earlier, memo, progress)?;
+    reconstructed(scene, params, cs, placement, progress)
+}
+
+fn reconstructed(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cs: &CacheSettings,
+    placement: Placement,
+    progress: &Progress,
+) -> Result<CachedRender, Cancelled> {
     let second_order = cs.second_order && cs.method == CacheMethod::Ours;
     let reconstruction = reconstruct(scene, params, CacheView::of(&placement), second_order, progress)?;
     Ok(CachedRender {
