@@ -54,7 +54,7 @@ fn moments_give_the_record<F: Fixture>() {
                     compute_record(&world, x, Outgoing::Direction(w_o), &cs, 7 + i as u64, &Progress::new()).unwrap();
                 let want = rd.payload(Cached::Scattered);
                 let got = combine(
-                    &rd.moment_payload(Cached::Scattered),
+                    &rd.moment_payload(Cached::Scattered).moments,
                     &weights_towards::<F>(0.5, bands, w_o),
                 );
                 worst[j] = differences(&want, &got);

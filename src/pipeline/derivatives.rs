@@ -603,6 +603,21 @@ pub fn plain_estimate<S: Dim>(lf: &LightField<S>) -> Parts {
     }
 }
 
+/// `parts` with the light field's plain estimate as their values (a record's
+/// value: unbiased, whatever the method's derivatives).
+pub fn with_plain_values<S: Dim>(mut parts: PartDerivs<S>, lf: &LightField<S>) -> PartDerivs<S> {
+    let plain = plain_estimate(lf);
+    for (part, value) in [&mut parts.direct, &mut parts.single, &mut parts.multiple]
+        .into_iter()
+        .zip(plain.as_array())
+    {
+        for (c, ch) in part.channels.iter_mut().enumerate() {
+            ch.value = value[c];
+        }
+    }
+    parts
+}
+
 /// Finite-difference reference settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ReferenceSettings {

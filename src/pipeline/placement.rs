@@ -16,6 +16,7 @@
 //! is what a fresh placement would take (its checks plus its records' capture).
 
 use super::dim::Dim;
+use super::moments::{MomentQuery, RecordMoments};
 use super::probe::Outgoing;
 use super::record::{CacheSettings, Cached, RecordData, RecordInfo, compute_record, sees};
 use super::world::World;
@@ -67,7 +68,7 @@ pub struct Placement<S: Dim> {
     pub eps: f64,
     /// Per cache, per record (in the cache's order): its moments over ω_o
     /// (`super::moments`), empty without [`CacheSettings::moment_bands`].
-    pub moments: Vec<Vec<Vec<TaylorRgb<S>>>>,
+    pub moments: Vec<Vec<RecordMoments<S>>>,
     /// Query points visited.
     pub query_points: u64,
     /// Rays of the records' light fields plus the visibility tests of the checks.
@@ -254,21 +255,20 @@ pub fn interpolate<W: World>(
 }
 
 /// [`interpolate`] from the records' moments over ω_o (`table`, as
-/// [`Placement::moments`]), combined with `weights` ([`super::moments::weights_towards`]
-/// of the ω_o at `y`).
+/// [`Placement::moments`]) for the ω_o of `query` ([`RecordMoments::towards`]).
 #[allow(clippy::too_many_arguments)] // interpolate's inputs and the moments'
 pub fn interpolate_moments<W: World>(
     world: &W,
     cache: &RadianceCache<W::S>,
-    table: &[Vec<TaylorRgb<W::S>>],
-    weights: &[f64],
+    table: &[RecordMoments<W::S>],
+    query: &MomentQuery<W::S>,
     y: <W::S as crate::core::space::Space>::Vec,
     second_order: bool,
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
     interpolate_by(world, cache, y, second_order, scratch, rays, |i| {
-        super::moments::combine(&table[i], weights)
+        table[i].towards(&cache.records()[i].value, query)
     })
 }
 

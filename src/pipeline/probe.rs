@@ -206,6 +206,8 @@ impl<S: Dim> ProbeRay<S> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MediumSample<S: Dim> {
     pub at: S::Vec,
+    /// Its distance from x along the ray.
+    pub depth: f64,
     /// L_s·Δt (σ_s included).
     pub light: Rgb,
     /// ∇_dir of `light` per channel (see [`ProbeRay::slopes`]).
@@ -257,10 +259,12 @@ impl<S: Dim> LightField<S> {
     pub fn medium_sample(&self, ray: usize, i: usize) -> Option<MediumSample<S>> {
         let r = &self.rays[ray];
         let light = *r.samples.get(i)?;
-        let dt = self.sample_thickness(r, i);
+        let depth = self.sample_depth(r, i);
+        let dt = self.march.thickness_at(depth);
         let slope = r.slopes.get(i).map_or([S::zero(); 3], |g| g.map(|v| v * dt));
         Some(MediumSample {
-            at: self.x + r.dir * self.sample_depth(r, i),
+            at: self.x + r.dir * depth,
+            depth,
             light: light * dt,
             slope,
         })

@@ -30,7 +30,7 @@
 //! Transmittance and phase are evaluated towards the element's anchor.
 
 use super::dim::Dim;
-use super::probe::{LightField, ProbeRay};
+use super::probe::LightField;
 use super::silhouette::BRIDGE_RATIO;
 use crate::core::color::Rgb;
 use crate::core::space::Space;
@@ -224,21 +224,22 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
     }
     let shells = lf.rays.iter().map(|r| r.samples.len()).max().unwrap_or(0);
     for t in &lf.simplices {
-        let ray = |k: usize| -> &ProbeRay<S> { &lf.rays[t.as_ref()[k] as usize] };
         let omega = measure(t);
         for i in 0..shells {
-            let present: S::Simplex<bool> = S::simplex(|k| i < ray(k).samples.len());
+            // Each vertex's sample of shell i, where its ray reaches that far.
+            let mut samples = [None; 3];
+            for (s, &j) in samples.iter_mut().zip(t.as_ref()) {
+                *s = lf.medium_sample(j as usize, i);
+            }
+            let present: S::Simplex<bool> = S::simplex(|k| samples[k].is_some());
             if !present.as_ref().iter().any(|&p| p) {
                 continue;
             }
-            let v: S::Simplex<Vertex<S>> = S::simplex(|k| {
-                let j = t.as_ref()[k] as usize;
-                match lf.medium_sample(j, i) {
-                    Some(m) => (m.at, lf.sample_depth(ray(k), i), m.light, m.at),
-                    None => {
-                        let e = ends[j];
-                        (e.0, e.1, Rgb::ZERO, e.3)
-                    }
+            let v: S::Simplex<Vertex<S>> = S::simplex(|k| match &samples[k] {
+                Some(m) => (m.at, m.depth, m.light, m.at),
+                None => {
+                    let e = ends[t.as_ref()[k] as usize];
+                    (e.0, e.1, Rgb::ZERO, e.3)
                 }
             });
             if v.as_ref().iter().all(|e| e.2 == Rgb::ZERO) {

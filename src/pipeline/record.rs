@@ -12,9 +12,9 @@
 //! proxy's own value is 4–8% low where emitters' outlines cross its elements: the
 //! farther-vertex rule darkens them.)
 
-use super::derivatives::{AwareSettings, PartDerivs, aware_with_floor, plain_estimate, unaware};
+use super::derivatives::{AwareSettings, PartDerivs, aware_with_floor, unaware, with_plain_values};
 use super::dim::Dim;
-use super::moments::moment_derivs;
+use super::moments::{RecordMoments, combine, moment_derivs, weights_towards};
 use super::path::Settings;
 use super::probe::{Outgoing, ProbeSettings, capture};
 use super::proxy::build;
@@ -95,6 +95,10 @@ pub struct RecordData<S: Dim> {
     /// Per basis function of the moments over ω_o, value and derivatives per part
     /// (empty unless asked for: [`CacheSettings::moment_bands`]).
     pub moments: Vec<PartDerivs<S>>,
+    /// The moments' weights for the ω_o the record was made for.
+    pub placed_weights: Vec<f64>,
+    /// That ω_o (unit).
+    pub placed_omega: S::Vec,
     pub rays: u64,
     /// Wall time of the capture and derivatives.
     pub seconds: f64,
@@ -111,13 +115,19 @@ impl<S: Dim> RecordData<S> {
     }
 
     /// The moments of a cached quantity (empty without moments).
-    pub fn moment_payload(&self, q: Cached) -> Vec<crate::core::taylor_rgb::TaylorRgb<S>> {
+    pub fn moment_payload(&self, q: Cached) -> RecordMoments<S> {
         let of = |p: &PartDerivs<S>| match q {
             Cached::Scattered => p.single + p.multiple,
             Cached::Single => p.single,
             Cached::Multiple => p.multiple,
         };
-        self.moments.iter().map(of).collect()
+        let moments: Vec<_> = self.moments.iter().map(of).collect();
+        let as_placed = combine(&moments, &self.placed_weights);
+        RecordMoments {
+            moments,
+            as_placed,
+            placed_omega: self.placed_omega,
+        }
     }
 
     pub fn metric_hessian(&self, q: Cached) -> S::Mat {
@@ -146,7 +156,7 @@ pub fn compute_record<W: World>(
         CacheMethod::Ours => build(&lf, cs.aware.rule),
         CacheMethod::Jarosz08 => Vec::new(),
     };
-    let (mut parts, metric_hessians) = match cs.method {
+    let (parts, metric_hessians) = match cs.method {
         CacheMethod::Ours => {
             let (parts, floored) = aware_with_floor(&lf, &elements, &cs.aware, cs.hessian_floor);
             let floored = floored.unwrap_or(parts);
@@ -160,23 +170,27 @@ pub fn compute_record<W: World>(
         }
         CacheMethod::Jarosz08 => (unaware(&lf), [zero; 3]),
     };
-    let plain = plain_estimate(&lf);
-    for (part, value) in [&mut parts.direct, &mut parts.single, &mut parts.multiple]
-        .into_iter()
-        .zip(plain.as_array())
-    {
-        for (c, ch) in part.channels.iter_mut().enumerate() {
-            ch.value = value[c];
-        }
-    }
-    let moments = match cs.moment_bands {
-        Some(bands) => moment_derivs(&mut lf, cs.method, &elements, &cs.aware, bands),
-        None => Vec::new(),
+    let parts = with_plain_values(parts, &lf);
+    let (moments, placed_weights) = match cs.moment_bands {
+        Some(bands) => (
+            moment_derivs(&mut lf, cs.method, &elements, &cs.aware, bands),
+            weights_towards::<W::S>(lf.g, bands, lf.omega_o),
+        ),
+        None => (Vec::new(), Vec::new()),
     };
     Ok(RecordData {
         parts,
         metric_hessians,
         moments,
+        placed_weights,
+        placed_omega: {
+            let l = <W::S as Space>::length(lf.omega_o);
+            if l > 0.0 {
+                lf.omega_o / l
+            } else {
+                <W::S as Space>::axis(0)
+            }
+        },
         rays: lf.cost_rays,
         seconds: start.elapsed().as_secs_f64(),
     })

@@ -6,7 +6,7 @@
 use super::render::RenderParams;
 use super::scene::Scene;
 use crate::core::space::D3;
-use crate::core::taylor_rgb::TaylorRgb;
+use crate::pipeline::moments::RecordMoments;
 use serde::Serialize;
 
 pub type RecordMemo = crate::pipeline::placement::RecordMemo<D3>;
@@ -44,7 +44,7 @@ impl CachedRenderParams {
 pub struct CacheView<'a> {
     pub cache: &'a RadianceCache,
     /// Per record, its moments (all of bands 0..=L), if every record has them.
-    pub moments: Option<&'a [Vec<TaylorRgb<D3>>]>,
+    pub moments: Option<&'a [RecordMoments<D3>]>,
 }
 
 impl<'a> CacheView<'a> {

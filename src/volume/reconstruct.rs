@@ -14,7 +14,7 @@ use super::scene::Scene;
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::{Sampler, mix64};
 use crate::core::space::D3;
-use crate::pipeline::moments::weights_towards;
+use crate::pipeline::moments::{MomentQuery, weights_towards};
 use crate::pipeline::path::{radiance_leaving, sample_at};
 use crate::pipeline::placement::{interpolate, interpolate_moments};
 use crate::pipeline::world::World;
@@ -53,10 +53,15 @@ pub fn reconstruct(
         let cached = match (view.moments, lobe) {
             (Some(table), Lobe::Phase { travel, .. }) => {
                 if weights.0 != *travel || weights.1.is_empty() {
-                    let bands = (table[0].len() as f64).sqrt().round() as usize - 1;
+                    let bands = (table[0].moments.len() as f64).sqrt().round() as usize - 1;
                     weights = (*travel, weights_towards::<D3>(g, bands, -*travel));
                 }
-                interpolate_moments(scene, cache, table, &weights.1, p, second_order, &mut scratch, rays)
+                let query = MomentQuery {
+                    weights: &weights.1,
+                    omega_o: -*travel,
+                    g,
+                };
+                interpolate_moments(scene, cache, table, &query, p, second_order, &mut scratch, rays)
             }
             _ => interpolate(scene, cache, p, second_order, &mut scratch, rays),
         };
