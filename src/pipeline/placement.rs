@@ -127,6 +127,11 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             vec![Vec::new(); cached.len()],
         ),
     };
+    // Records without moments (read from a file) keep an empty entry, so that entry
+    // i stays record i's.
+    for (table, cache) in moments.iter_mut().zip(&caches) {
+        table.resize(cache.len(), RecordMoments::default());
+    }
     let (mut query_points, mut rays, mut records_seconds, mut capture_wall) = (0u64, 0u64, 0.0, 0.0);
     let uncovered = |caches: &[RadianceCache<W::S>], y, rays: &mut u64| -> Vec<usize> {
         (0..caches.len())
