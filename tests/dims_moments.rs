@@ -97,3 +97,65 @@ fn moments_give_the_record_2d() {
 fn moments_give_the_record_3d() {
     moments_give_the_record::<D3>();
 }
+
+/// The one pass over the medium samples and surfaces for every basis function
+/// (moments_sum::aware_moments, unaware_moments) is the per-basis-function sum
+/// (each pass with `LightField::moment` set), to rounding.
+fn one_pass_is_the_per_moment_sum<F: Fixture>() {
+    use volcache::pipeline::derivatives::{AwareSettings, aware, unaware};
+    use volcache::pipeline::moments_sum::{aware_moments, unaware_moments};
+    use volcache::pipeline::probe::{ProbeSettings, capture};
+    use volcache::pipeline::proxy::build;
+    let spec = Spec {
+        ceiling: Some(Rgb::new(4.0, 3.0, 2.0)),
+        floor: Some(Rgb::splat(0.5)),
+        medium: Some((Rgb::splat(0.1), Rgb::splat(0.8), 0.6)),
+        ..Spec::default()
+    };
+    let world = F::scene(&spec);
+    let ps = ProbeSettings {
+        rays: 256,
+        steps: 8,
+        ..ProbeSettings::default_for::<F>()
+    };
+    let x = F::point([0.1, 0.4, 0.2]);
+    let w = F::point([0.0, 0.6, 0.8]);
+    let mut lf = capture(&world, x, Outgoing::Direction(w), &ps, 5, 0, &Progress::new()).unwrap();
+    let elements = build(&lf, AwareSettings::default().rule);
+    let settings = AwareSettings::default();
+    let all = aware_moments(&mut lf, &elements, &settings, 3);
+    let all_unaware = unaware_moments(&mut lf, 3);
+    assert_eq!(lf.moment, None, "the light field is left as given");
+    for (k, (got, got_u)) in all.iter().zip(&all_unaware).enumerate() {
+        lf.moment = Some(k);
+        let want = aware(&lf, &elements, &settings);
+        let want_u = unaware(&lf);
+        for (g, w) in [
+            (got.single, want.single),
+            (got.multiple, want.multiple),
+            (got.direct, want.direct),
+            (got_u.single, want_u.single),
+            (got_u.multiple, want_u.multiple),
+            (got_u.direct, want_u.direct),
+        ] {
+            let (g, w) = (g.luminance(), w.luminance());
+            let col_max = |m: F::Mat| (0..F::DIM).map(|j| F::length(F::col(m, j))).fold(0.0, f64::max);
+            let size = w.value.abs().max(F::length(w.grad)).max(col_max(w.hess));
+            let diff = (g.value - w.value)
+                .abs()
+                .max(F::length(g.grad - w.grad))
+                .max(col_max(g.hess - w.hess));
+            assert!(diff <= 1e-9 * size, "{}D k = {k}: {diff:e} of {size:e}", F::DIM);
+        }
+    }
+}
+
+#[test]
+fn one_pass_is_the_per_moment_sum_2d() {
+    one_pass_is_the_per_moment_sum::<D2>();
+}
+
+#[test]
+fn one_pass_is_the_per_moment_sum_3d() {
+    one_pass_is_the_per_moment_sum::<D3>();
+}

@@ -195,7 +195,7 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
 
 /// K·∇_ωL·∇_x ω for light L seen from x at `p` with direction gradient `slope`
 /// and kernel value `k` (∇_x ω = −(I − ωωᵀ)/r).
-fn turning<S: Dim>(x: S::Vec, p: S::Vec, slope: S::Vec, k: f64) -> S::Vec {
+pub(super) fn turning<S: Dim>(x: S::Vec, p: S::Vec, slope: S::Vec, k: f64) -> S::Vec {
     let r = S::length(p - x);
     if r <= 0.0 {
         return S::zero();
@@ -359,7 +359,7 @@ fn bridging_slope<S: Dim>(lf: &LightField<S>, e: &Element<S>) -> [S::Vec; 3] {
 }
 
 /// See [`medium_point`].
-const HESSIAN_SCALE_REACH: f64 = 32.0;
+pub(super) const HESSIAN_SCALE_REACH: f64 = 32.0;
 
 /// f_ε·F_ε/Δt of a medium point of thickness Δt (F = Ω r^{d−1} Δt / r_ε^{d−1}),
 /// smoothed at ε = `smoothing` (or the piece's own size), value included; `phase`
@@ -387,7 +387,7 @@ fn smoothed_kernel<S: Dim>(
 
 /// Elements summed per parallel task: the partial sums are added in a fixed order,
 /// so the result is the same bit for bit whatever the thread count.
-const SUM_CHUNK: usize = 2048;
+pub(super) const SUM_CHUNK: usize = 2048;
 
 /// Ours: value, gradient and Hessian of L_s from the proxy elements.
 pub fn aware<S: Dim>(lf: &LightField<S>, elements: &[Element<S>], settings: &AwareSettings) -> PartDerivs<S> {
@@ -482,7 +482,7 @@ pub fn aware_with_floor<S: Dim>(
 }
 
 /// Rays summed per parallel task (see [`SUM_CHUNK`]).
-const RAY_CHUNK: usize = 64;
+pub(super) const RAY_CHUNK: usize = 64;
 
 /// Per part sums of [`aware_with_floor`], plain and floored.
 #[derive(Clone, Copy, Default)]
@@ -515,7 +515,7 @@ impl<S: Dim> std::ops::AddAssign for Sums<S> {
 
 /// Each medium sample's share of the measure of the non-bridging shell pieces it
 /// is a vertex of, and their sizes weighted by share (see [`aware_with_floor`]).
-struct SampleShares {
+pub(super) struct SampleShares {
     /// Where each ray's samples start in `measure` and `size`.
     first: Vec<usize>,
     measure: Vec<f64>,
@@ -523,7 +523,7 @@ struct SampleShares {
 }
 
 impl SampleShares {
-    fn gather<'a, S: Dim>(lf: &LightField<S>, pieces: impl Iterator<Item = &'a Element<S>>) -> Self {
+    pub(super) fn gather<'a, S: Dim>(lf: &LightField<S>, pieces: impl Iterator<Item = &'a Element<S>>) -> Self {
         let mut first = Vec::with_capacity(lf.rays.len() + 1);
         let mut n = 0;
         for r in &lf.rays {
@@ -545,7 +545,7 @@ impl SampleShares {
     }
 
     /// Sample i of ray j's measure and mean piece size, if it has a share.
-    fn of(&self, j: usize, i: usize) -> Option<(f64, f64)> {
+    pub(super) fn of(&self, j: usize, i: usize) -> Option<(f64, f64)> {
         let k = self.first[j] + i;
         let m = self.measure[k];
         (m > 0.0).then(|| (m, self.size[k] / m))

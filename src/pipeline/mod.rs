@@ -17,6 +17,7 @@ pub mod emitters;
 pub mod lobe;
 pub mod medium;
 pub mod moments;
+pub mod moments_sum;
 pub mod nee;
 pub mod path;
 pub mod placement;

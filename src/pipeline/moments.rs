@@ -12,9 +12,9 @@
 //!
 //! Every phase factor of the derivative sums goes through the light field's
 //! `angular_*` functions below, which switch between the phase and a basis
-//! function; the moments are those sums run once per basis function (so a record
-//! with (L + 1)² moments pays (L + 1)² derivative passes; the capture, most of a
-//! record's cost without moments, is shared).
+//! function; the moments are those sums per basis function: the medium samples —
+//! most of the sums — in one pass for all of them (`super::moments_sum`), the few
+//! surfaces, bridging pieces and delta lights once per basis function.
 //!
 //! Measured (tests/dims_moments.rs): Jarosz 2008's sums are linear in the phase
 //! factor and the moments give its record to 5e-4. Ours softens the phase near x
@@ -23,13 +23,14 @@
 //! and 3% (3D) of their size, Hessians by 5% / 2% — the two are different
 //! regularisations of the same near field, neither the exact one.
 
-use super::derivatives::{AwareSettings, PartDerivs, aware, unaware, with_plain_values};
+use super::derivatives::{AwareSettings, PartDerivs};
 use super::dim::Dim;
+use super::moments_sum::{aware_moments, unaware_moments};
 use super::probe::LightField;
 use super::proxy::Element;
 use crate::core::color::Rgb;
 use crate::core::distance::{Offset, direction_along_from};
-use crate::core::harmonics::{basis, basis_count, phase_weights};
+use crate::core::harmonics::{basis, phase_weights};
 use crate::core::metric::CacheMethod;
 use crate::core::phase::{hg_of_mu, phase_taylor_fixed_direction, phase_taylor_out};
 use crate::core::space::Space;
@@ -113,19 +114,26 @@ pub fn moment_derivs<S: Dim>(
     settings: &AwareSettings,
     bands: usize,
 ) -> Vec<PartDerivs<S>> {
-    let kept = lf.moment;
-    let out = (0..basis_count::<S>(bands))
-        .map(|k| {
-            lf.moment = Some(k);
-            let parts = match method {
-                CacheMethod::Ours => aware(lf, elements, settings),
-                CacheMethod::Jarosz08 => unaware(lf),
-            };
-            with_plain_values(parts, lf)
-        })
-        .collect();
-    lf.moment = kept;
-    out
+    // Jarosz 2008's sums, whose values are the plain estimates (a record's values).
+    let plain = unaware_moments(lf, bands);
+    match method {
+        CacheMethod::Jarosz08 => plain,
+        CacheMethod::Ours => aware_moments(lf, elements, settings, bands)
+            .into_iter()
+            .zip(&plain)
+            .map(|(mut parts, p)| {
+                for (part, value) in [&mut parts.direct, &mut parts.single, &mut parts.multiple]
+                    .into_iter()
+                    .zip([p.direct.value(), p.single.value(), p.multiple.value()])
+                {
+                    for (c, ch) in part.channels.iter_mut().enumerate() {
+                        ch.value = value[c];
+                    }
+                }
+                parts
+            })
+            .collect(),
+    }
 }
 
 /// The weights c_k of the moments for L_s leaving towards `w_o` in a medium of
