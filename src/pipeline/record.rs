@@ -45,7 +45,9 @@ pub struct CacheSettings {
     /// Seed of the records' light fields.
     pub seed: u64,
     /// Also store each record's harmonic moments over ω_o up to this band
-    /// (`super::moments`), so that the cache serves any camera.
+    /// (`super::moments`), so that the cache serves any camera. (Left out of JSON
+    /// when not asked for: a null there reads as a non-finite number.)
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub moment_bands: Option<usize>,
 }
 
