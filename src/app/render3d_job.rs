@@ -23,9 +23,9 @@ use std::sync::Arc;
 
 /// The band the view's "keep records when the camera moves" starts at: on
 /// scenes3d/lamp_fog.json (g = 0.8, `bench moments3d`), L = 4 kept a moved camera's
-/// medium RMSE within 1.2–2.1× of a fresh cache's in a third to a half of its time
+/// medium RMSE within 1.2–2.1× of a fresh cache's in 21–36% of its time
 /// (stale records 1.5–5×); L = 2 was 1.4–2× worse than L = 4 at 15° and 60°, and
-/// every band costs its first view (L + 1)² derivative passes per record.
+/// more bands cost every record placed with them more (3.2–4.2× at L = 4).
 pub const DEFAULT_MOMENT_BANDS: usize = 4;
 
 /// How the 3D view's image is made.
