@@ -241,7 +241,11 @@ impl Workbench3d {
             return;
         }
         let Some(f) = self.render.current() else { return };
-        if let (true, Some(p)) = (f.level == f.levels, &f.placement) {
+        let already = |p: &Arc<Placement>| self.kept.as_ref().is_some_and(|k| Arc::ptr_eq(&k.2, p));
+        // Once per finished frame, not per UI frame (the description is cloned).
+        if let (true, Some(p)) = (f.level == f.levels, &f.placement)
+            && !already(p)
+        {
             self.kept = Some((without_camera(self.doc.desc()), self.params.clone(), p.clone()));
         }
     }

@@ -605,11 +605,15 @@ pub fn plain_estimate<S: Dim>(lf: &LightField<S>) -> Parts {
 
 /// `parts` with the light field's plain estimate as their values (a record's
 /// value: unbiased, whatever the method's derivatives).
-pub fn with_plain_values<S: Dim>(mut parts: PartDerivs<S>, lf: &LightField<S>) -> PartDerivs<S> {
-    let plain = plain_estimate(lf);
+pub fn with_plain_values<S: Dim>(parts: PartDerivs<S>, lf: &LightField<S>) -> PartDerivs<S> {
+    with_values(parts, plain_estimate(lf).as_array())
+}
+
+/// `parts` with `values` (direct, single, multiple) as their values.
+pub fn with_values<S: Dim>(mut parts: PartDerivs<S>, values: [Rgb; 3]) -> PartDerivs<S> {
     for (part, value) in [&mut parts.direct, &mut parts.single, &mut parts.multiple]
         .into_iter()
-        .zip(plain.as_array())
+        .zip(values)
     {
         for (c, ch) in part.channels.iter_mut().enumerate() {
             ch.value = value[c];

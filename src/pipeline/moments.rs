@@ -23,13 +23,12 @@
 //! and 3% (3D) of their size, Hessians by 5% / 2% — the two are different
 //! regularisations of the same near field, neither the exact one.
 
-use super::derivatives::{AwareSettings, PartDerivs};
+use super::derivatives::{AwareSettings, PartDerivs, with_values};
 use super::dim::Dim;
-use super::moments_sum::{aware_moments, unaware_moments};
+use super::moments_sum::{arriving_travel, aware_moments, unaware_moments};
 use super::probe::LightField;
 use super::proxy::Element;
 use crate::core::color::Rgb;
-use crate::core::distance::{Offset, direction_along_from};
 use crate::core::harmonics::{basis, phase_weights};
 use crate::core::metric::CacheMethod;
 use crate::core::phase::{hg_of_mu, phase_taylor_fixed_direction, phase_taylor_out};
@@ -44,15 +43,7 @@ impl<S: Dim> LightField<S> {
     pub fn angular_towards(&self, x: S::Vec, c: S::Vec, soft: f64) -> Taylor2<S> {
         match self.moment {
             None => phase_taylor_out::<S>(self.g, x, c, self.outgoing(), soft),
-            Some(k) => {
-                // The softened direction once, its components from it.
-                let o = Offset::<S>::new(x, c, soft);
-                let mut d = [Taylor2::<S>::zero(); 3];
-                for (i, di) in d.iter_mut().enumerate().take(S::DIM) {
-                    *di = -direction_along_from(&o, S::axis(i));
-                }
-                basis(k, &d[..S::DIM])
-            }
+            Some(k) => basis(k, &arriving_travel::<S>(x, c, soft)[..S::DIM]),
         }
     }
 
@@ -121,17 +112,7 @@ pub fn moment_derivs<S: Dim>(
         CacheMethod::Ours => aware_moments(lf, elements, settings, bands)
             .into_iter()
             .zip(&plain)
-            .map(|(mut parts, p)| {
-                for (part, value) in [&mut parts.direct, &mut parts.single, &mut parts.multiple]
-                    .into_iter()
-                    .zip([p.direct.value(), p.single.value(), p.multiple.value()])
-                {
-                    for (c, ch) in part.channels.iter_mut().enumerate() {
-                        ch.value = value[c];
-                    }
-                }
-                parts
-            })
+            .map(|(parts, p)| with_values(parts, [p.direct.value(), p.single.value(), p.multiple.value()]))
             .collect(),
     }
 }

@@ -25,15 +25,21 @@ use crate::core::transmittance::transmittance_taylor_rgb;
 use crate::core::unaware::{UnawareRay, hit_distance_gradient};
 use rayon::prelude::*;
 
-/// Every basis function B_k(−ω) of light from `c` received at `x`, ω softened at
-/// `soft` (as `LightField::angular_towards`).
-fn bases<S: Dim>(bands: usize, x: S::Vec, c: S::Vec, soft: f64) -> Vec<Taylor2<S>> {
+/// The components of −ω, the travel direction of light arriving at x from `c`
+/// (ω softened at `soft`), as fields of x: what the basis functions are taken of.
+pub(super) fn arriving_travel<S: Dim>(x: S::Vec, c: S::Vec, soft: f64) -> [Taylor2<S>; 3] {
     let o = Offset::<S>::new(x, c, soft);
     let mut d = [Taylor2::<S>::zero(); 3];
     for (i, di) in d.iter_mut().enumerate().take(S::DIM) {
         *di = -direction_along_from(&o, S::axis(i));
     }
-    basis_all(bands, &d[..S::DIM])
+    d
+}
+
+/// Every basis function B_k(−ω) of light from `c` received at `x`, ω softened at
+/// `soft` (as `LightField::angular_towards`).
+fn bases<S: Dim>(bands: usize, x: S::Vec, c: S::Vec, soft: f64) -> Vec<Taylor2<S>> {
+    basis_all(bands, &arriving_travel::<S>(x, c, soft)[..S::DIM])
 }
 
 /// Ours' aware sums for every basis function of bands 0..=`bands` (values are the
