@@ -13,7 +13,7 @@ use volcache::core::space::{D2, D3};
 use volcache::core::taylor_rgb::TaylorRgb;
 use volcache::pipeline::moments::{combine, weights_towards};
 use volcache::pipeline::path::Settings;
-use volcache::pipeline::probe::Outgoing;
+use volcache::pipeline::probe::{Angular, Outgoing};
 use volcache::pipeline::record::{CacheSettings, Cached, compute_record};
 use volcache::progress::Progress;
 
@@ -125,9 +125,9 @@ fn one_pass_is_the_per_moment_sum<F: Fixture>() {
     let settings = AwareSettings::default();
     let all = aware_moments(&mut lf, &elements, &settings, 3);
     let all_unaware = unaware_moments(&mut lf, 3);
-    assert_eq!(lf.moment, None, "the light field is left as given");
+    assert_eq!(lf.angular, Angular::Phase, "the light field is left as given");
     for (k, (got, got_u)) in all.iter().zip(&all_unaware).enumerate() {
-        lf.moment = Some(k);
+        lf.angular = Angular::Moment(k);
         let want = aware(&lf, &elements, &settings);
         let want_u = unaware(&lf);
         for (g, w) in [

@@ -11,7 +11,7 @@
 
 use super::dim::Dim;
 use super::path::{Estimate, Parts, Query, Settings, estimate};
-use super::probe::{LightField, MediumSample, Outgoing};
+use super::probe::{Angular, LightField, MediumSample, Outgoing};
 use super::proxy::{Element, ElementKind, RadianceRule};
 use super::slide;
 use super::world::{DirectLight, World};
@@ -154,7 +154,9 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
     if e.kind == ElementKind::Surface {
         // Where the phase integrates in closed form over the element (2D), it does:
         // a lobe narrower than the element (g → ±1) is then exact.
-        if let Some(pw) = S::phase_weighted_form(lf.g, e.v, lf.x, lf.outgoing()).filter(|_| lf.moment.is_none()) {
+        if let Some(pw) =
+            S::phase_weighted_form(lf.g, e.v, lf.x, lf.outgoing()).filter(|_| lf.angular == Angular::Phase)
+        {
             let v = e.v.as_ref();
             let t = match e.far_plane {
                 Some(plane) => slide::vertex_rule(lf, e, plane, soft, false),

@@ -75,6 +75,11 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     /// The simplices joining neighbouring directions (neighbouring rays in 2D, the
     /// triangulation of the sphere in 3D), counter-clockwise / outward.
     fn neighbours(dirs: &[Self::Vec]) -> Vec<Self::Simplex<u32>>;
+    /// `n` stratified unit directions over the half circle or hemisphere on the side
+    /// of the unit `normal` (a surface point's probe).
+    fn hemisphere(n: usize, normal: Self::Vec, jitter: f64, seed: u64) -> Vec<Self::Vec>;
+    /// Their neighbours: an open chain (2D), a triangulated disc (3D).
+    fn hemisphere_neighbours(dirs: &[Self::Vec], normal: Self::Vec) -> Vec<Self::Simplex<u32>>;
     /// The angle (solid angle) spanned by unit directions.
     fn direction_measure(dirs: Self::Simplex<Self::Vec>) -> f64;
     /// The vertices reordered so that their form factor seen from `x` is positive.
@@ -194,6 +199,12 @@ impl Dim for D2 {
         let n = dirs.len() as u32;
         (0..n).map(|k| [k, (k + 1) % n]).collect()
     }
+    fn hemisphere(n: usize, normal: DVec2, jitter: f64, seed: u64) -> Vec<DVec2> {
+        directions::half_circle(n, normal, jitter, seed)
+    }
+    fn hemisphere_neighbours(dirs: &[DVec2], _: DVec2) -> Vec<[u32; 2]> {
+        (1..dirs.len() as u32).map(|k| [k - 1, k]).collect()
+    }
     fn direction_measure([a, b]: [DVec2; 2]) -> f64 {
         a.perp_dot(b).atan2(a.dot(b)).abs()
     }
@@ -281,6 +292,12 @@ impl Dim for D3 {
     }
     fn neighbours(dirs: &[DVec3]) -> Vec<[u32; 3]> {
         directions::triangulate(dirs).expect("stratified directions triangulate")
+    }
+    fn hemisphere(n: usize, normal: DVec3, jitter: f64, seed: u64) -> Vec<DVec3> {
+        directions::hemisphere(n, normal, jitter, seed)
+    }
+    fn hemisphere_neighbours(dirs: &[DVec3], normal: DVec3) -> Vec<[u32; 3]> {
+        directions::triangulate_hemisphere(dirs, normal).expect("stratified directions triangulate")
     }
     fn direction_measure([a, b, c]: [DVec3; 3]) -> f64 {
         directions::solid_angle(a, b, c).abs()

@@ -21,7 +21,7 @@
 use crate::core::rng::Sampler;
 use glam::{DVec2, DVec3};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 
 /// N stratified directions on the circle (see the module docs).
 pub fn circle(n: usize, jitter: f64, seed: u64) -> Vec<DVec2> {
@@ -113,6 +113,74 @@ pub fn triangulate(dirs: &[DVec3]) -> Result<Vec<[u32; 3]>, SphereError> {
     Ok(tris)
 }
 
+/// N stratified directions over the half circle on the side of the unit `normal`,
+/// counter-clockwise from the tangent −perp(n) through n: θ_k = π(k + ½ + j·(ξ_k − ½))/N
+/// from that tangent. Neighbours are (k, k + 1), an open chain (a surface's probe).
+pub fn half_circle(n: usize, normal: DVec2, jitter: f64, seed: u64) -> Vec<DVec2> {
+    let start = -normal.perp();
+    (0..n)
+        .map(|k| {
+            let xi = Sampler::new2(seed, 0x5f3e_7e2e, k as u64).next_f64();
+            let theta = PI * (k as f64 + 0.5 + jitter * (xi - 0.5)) / n as f64;
+            start * theta.cos() + normal * theta.sin()
+        })
+        .collect()
+}
+
+/// N stratified directions over the hemisphere around the unit `normal`: the upper
+/// half of a 2N-point spherical Fibonacci set about n (equal-area bands in n·ω,
+/// jittered alike), in the right-handed frame (t, b, n) of glam's
+/// `any_orthonormal_pair` (so the triangulation's orientation carries over).
+pub fn hemisphere(n: usize, normal: DVec3, jitter: f64, seed: u64) -> Vec<DVec3> {
+    let golden = (1.0 + 5f64.sqrt()) * 0.5;
+    let nf = n as f64;
+    let dphi = TAU / (2.0 * nf).sqrt();
+    let (t, b) = normal.any_orthonormal_pair();
+    (0..n)
+        .map(|k| {
+            let mut s = Sampler::new2(seed, 0x5f3e_7e2e, k as u64);
+            let (u, v) = if jitter > 0.0 {
+                (s.next_f64() - 0.5, s.next_f64() - 0.5)
+            } else {
+                (0.0, 0.0)
+            };
+            let z = (1.0 - (k as f64 + 0.5 + jitter * u) / nf).clamp(0.0, 1.0);
+            let phi = TAU * (k as f64 / golden).fract() + jitter * v * dphi;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            t * (r * phi.cos()) + b * (r * phi.sin()) + normal * z
+        })
+        .collect()
+}
+
+/// Triangulate directions on the hemisphere around the unit `normal` (all with
+/// n·ω ≥ 0): their stereographic projection from −n lies in the unit disc, and its
+/// Delaunay triangulation covers the projected points' convex hull — the hemisphere
+/// up to a sliver along the horizon, where a receiver's cosine vanishes.
+/// Counter-clockwise in the right-handed frame (t, b, n), so outward on the sphere.
+pub fn triangulate_hemisphere(dirs: &[DVec3], normal: DVec3) -> Result<Vec<[u32; 3]>, SphereError> {
+    let n = dirs.len();
+    if n < 3 {
+        return Err(SphereError::TooFew(n));
+    }
+    let (t, b) = normal.any_orthonormal_pair();
+    let pts: Vec<Projected> = dirs
+        .iter()
+        .enumerate()
+        .map(|(k, d)| {
+            let w = 1.0 / (1.0 + d.dot(normal).max(0.0));
+            Projected {
+                p: Point2::new(d.dot(t) * w, d.dot(b) * w),
+                index: k as u32,
+            }
+        })
+        .collect();
+    let dt = DelaunayTriangulation::<Projected>::bulk_load(pts).map_err(SphereError::Insertion)?;
+    if dt.num_vertices() != n {
+        return Err(SphereError::Duplicates(dt.num_vertices(), n));
+    }
+    Ok(dt.inner_faces().map(|f| f.vertices().map(|v| v.data().index)).collect())
+}
+
 /// Signed solid angle of the spherical triangle of unit vectors (a, b, c) (Van
 /// Oosterom–Strackee), positive when counter-clockwise seen from outside.
 pub fn solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
@@ -202,6 +270,40 @@ mod tests {
         for (n, seed) in [(64, 1), (256, 2), (4096, 3), (65536, 4), (16384, 5), (100, 6)] {
             check(n, 1.0, seed);
         }
+    }
+
+    #[test]
+    fn the_hemisphere_is_covered_once_up_to_the_horizon() {
+        for (n, jitter, seed) in [(64, 0.0, 1), (1024, 1.0, 2), (4096, 1.0, 3)] {
+            for normal in [DVec3::Z, DVec3::new(0.3, -0.8, 0.52).normalize(), -DVec3::Y] {
+                let dirs = hemisphere(n, normal, jitter, seed);
+                assert!(
+                    dirs.iter()
+                        .all(|d| (d.length() - 1.0).abs() < 1e-12 && d.dot(normal) >= 0.0)
+                );
+                let tris = triangulate_hemisphere(&dirs, normal).unwrap();
+                let mut sum = 0.0;
+                for t in &tris {
+                    let [a, b, c] = t.map(|i| dirs[i as usize]);
+                    let o = solid_angle(a, b, c);
+                    assert!(o > 0.0, "n={n}: an inverted or degenerate triangle ({o:e})");
+                    sum += o;
+                }
+                // The sliver left along the horizon shrinks with the ray count.
+                let missing = 1.0 - sum / (2.0 * PI);
+                assert!(missing > 0.0 && missing < 6.0 / (n as f64).sqrt(), "n={n}: {missing}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_half_circle_runs_counter_clockwise_on_the_normal_side() {
+        let normal = DVec2::new(0.6, 0.8);
+        let d = half_circle(256, normal, 1.0, 4);
+        assert!(d.iter().all(|v| v.dot(normal) > 0.0));
+        assert!(d.windows(2).all(|w| w[0].perp_dot(w[1]) > 0.0));
+        let total: f64 = d.windows(2).map(|w| w[0].perp_dot(w[1]).atan2(w[0].dot(w[1]))).sum();
+        assert!((total - PI).abs() < 2.0 * PI / 256.0, "{total}");
     }
 
     #[test]

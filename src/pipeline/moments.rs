@@ -26,7 +26,7 @@
 use super::derivatives::{AwareSettings, PartDerivs, with_values};
 use super::dim::Dim;
 use super::moments_sum::{arriving_travel, aware_moments, unaware_moments};
-use super::probe::LightField;
+use super::probe::{Angular, LightField};
 use super::proxy::Element;
 use crate::core::color::Rgb;
 use crate::core::harmonics::{basis, phase_weights};
@@ -41,42 +41,55 @@ impl<S: Dim> LightField<S> {
     /// ω = (c − x)/|c − x|, softened at `soft`) with its derivatives in x: the
     /// phase f(−ω·ω_o), or the basis function B_k(−ω) of moment k.
     pub fn angular_towards(&self, x: S::Vec, c: S::Vec, soft: f64) -> Taylor2<S> {
-        match self.moment {
-            None => phase_taylor_out::<S>(self.g, x, c, self.outgoing(), soft),
-            Some(k) => basis(k, &arriving_travel::<S>(x, c, soft)[..S::DIM]),
+        match self.angular {
+            Angular::Phase => phase_taylor_out::<S>(self.g, x, c, self.outgoing(), soft),
+            Angular::Moment(k) => basis(k, &arriving_travel::<S>(x, c, soft)[..S::DIM]),
+            Angular::Cosine(n) => {
+                // n·ω = −n·travel; clamped at the horizon (a kink only elements
+                // straddling it see, where the cosine is small).
+                let travel = arriving_travel::<S>(x, c, soft);
+                let mut mu = Taylor2::<S>::zero();
+                for (i, t) in travel.iter().enumerate().take(S::DIM) {
+                    mu += *t * (-n[i]);
+                }
+                if mu.value > 0.0 { mu } else { Taylor2::zero() }
+            }
         }
     }
 
     /// [`Self::angular_towards`] for light arriving along the fixed direction `w`
     /// (from w, travelling along −w): a basis function is then constant.
     pub fn angular_fixed(&self, x: S::Vec, w: S::Vec) -> Taylor2<S> {
-        match self.moment {
-            None => phase_taylor_fixed_direction::<S>(self.g, x, w, self.outgoing()),
-            Some(k) => Taylor2::constant(basis_at::<S>(k, -unit::<S>(w))),
+        match self.angular {
+            Angular::Phase => phase_taylor_fixed_direction::<S>(self.g, x, w, self.outgoing()),
+            Angular::Moment(k) => Taylor2::constant(basis_at::<S>(k, -unit::<S>(w))),
+            Angular::Cosine(n) => Taylor2::constant(S::dot(n, unit::<S>(w)).max(0.0)),
         }
     }
 
     /// The angular factor's value for light from `y` received at `x`.
     pub fn angular_at(&self, x: S::Vec, y: S::Vec) -> f64 {
         let u = unit::<S>(y - x);
-        match self.moment {
-            None => {
+        match self.angular {
+            Angular::Phase => {
                 let w = match self.outgoing() {
                     super::probe::Outgoing::Direction(w) => unit::<S>(w),
                     super::probe::Outgoing::TowardsPoint(eye) => unit::<S>(eye - x),
                 };
                 hg_of_mu::<S>(self.g, -S::dot(u, w)).0
             }
-            Some(k) => basis_at::<S>(k, -u),
+            Angular::Moment(k) => basis_at::<S>(k, -u),
+            Angular::Cosine(n) => S::dot(n, u).max(0.0),
         }
     }
 
     /// The angular factor does not depend on the direction (isotropic phase, or the
     /// constant basis function).
     pub fn angular_is_constant(&self) -> bool {
-        match self.moment {
-            None => self.g == 0.0,
-            Some(k) => k == 0,
+        match self.angular {
+            Angular::Phase => self.g == 0.0,
+            Angular::Moment(k) => k == 0,
+            Angular::Cosine(_) => false,
         }
     }
 }

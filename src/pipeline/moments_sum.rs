@@ -13,7 +13,7 @@ use super::derivatives::{
     element_incident, turning,
 };
 use super::dim::Dim;
-use super::probe::LightField;
+use super::probe::{Angular, LightField};
 use super::proxy::{Element, ElementKind};
 use crate::core::color::Rgb;
 use crate::core::distance::{Offset, direction_along_from, distance};
@@ -43,14 +43,14 @@ fn bases<S: Dim>(bands: usize, x: S::Vec, c: S::Vec, soft: f64) -> Vec<Taylor2<S
 }
 
 /// Ours' aware sums for every basis function of bands 0..=`bands` (values are the
-/// sums', not the plain estimate's). `lf.moment` is used and left as given.
+/// sums', not the plain estimate's). `lf.angular` is used and left as given.
 pub fn aware_moments<S: Dim>(
     lf: &mut LightField<S>,
     elements: &[Element<S>],
     settings: &AwareSettings,
     bands: usize,
 ) -> Vec<PartDerivs<S>> {
-    let kept = lf.moment;
+    let kept = lf.angular;
     let clamp = settings.medium_clamp;
     let gathered = |e: &Element<S>| e.kind == ElementKind::Medium && !e.bridging;
     // Surfaces that are no occlusion boundary: T L F at the anchor times the
@@ -58,7 +58,7 @@ pub fn aware_moments<S: Dim>(
     let plain_surface = |e: &Element<S>| e.kind == ElementKind::Surface && e.far_plane.is_none();
     let mut out: Vec<PartDerivs<S>> = (0..basis_count::<S>(bands))
         .map(|k| {
-            lf.moment = Some(k);
+            lf.angular = Angular::Moment(k);
             let lf = &*lf;
             let sums: Vec<(TaylorRgb<S>, TaylorRgb<S>)> = elements
                 .par_chunks(SUM_CHUNK)
@@ -86,7 +86,7 @@ pub fn aware_moments<S: Dim>(
             p
         })
         .collect();
-    lf.moment = kept;
+    lf.angular = kept;
     let lf = &*lf;
     let k_count = out.len();
     let sigma_s = [lf.sigma_s.x, lf.sigma_s.y, lf.sigma_s.z].map(Taylor2::constant);
@@ -226,7 +226,7 @@ fn sample_moments<S: Dim>(
 /// Jarosz et al. 2008's sums (`derivatives::unaware`) for every basis function of
 /// bands 0..=`bands`: a ray's direction is fixed, so its angular factor B_k(−ω) is
 /// a constant and the ray's sums are made once with a unit factor, then scaled.
-/// The values are the plain estimates of the moments. `lf.moment` is used and left
+/// The values are the plain estimates of the moments. `lf.angular` is used and left
 /// as given.
 pub fn unaware_moments<S: Dim>(lf: &mut LightField<S>, bands: usize) -> Vec<PartDerivs<S>> {
     let k_count = basis_count::<S>(bands);
@@ -267,10 +267,10 @@ pub fn unaware_moments<S: Dim>(lf: &mut LightField<S>, bands: usize) -> Vec<Part
             }
         }
     }
-    let kept = lf.moment;
+    let kept = lf.angular;
     let out = (0..k_count)
         .map(|k| {
-            lf.moment = Some(k);
+            lf.angular = Angular::Moment(k);
             let mut direct = direct_derivatives(lf);
             for ch in &mut direct.channels {
                 ch.hess = S::zero_mat();
@@ -282,6 +282,6 @@ pub fn unaware_moments<S: Dim>(lf: &mut LightField<S>, bands: usize) -> Vec<Part
             }
         })
         .collect();
-    lf.moment = kept;
+    lf.angular = kept;
     out
 }

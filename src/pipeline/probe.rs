@@ -214,6 +214,34 @@ pub struct MediumSample<S: Dim> {
     pub slope: [S::Vec; 3],
 }
 
+/// Which angular factor weights the light arriving at a light field's point x.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub enum Angular<V> {
+    /// The phase towards ω_o: L_s at a medium point.
+    Phase,
+    /// Basis function k of the harmonic moments over ω_o (`super::moments`).
+    Moment(usize),
+    /// The cosine max(0, n·ω) of a surface with unit normal n: the irradiance it
+    /// receives (σ_s is then 1).
+    Cosine(V),
+}
+
+/// A point on a surface as a light field's receiver (irradiance caching,
+/// Schwarzhaupt et al. 2012).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceReceiver<V> {
+    /// Unit normal of the side that receives.
+    pub normal: V,
+    /// The primitive the point lies on (its rays skip it).
+    pub prim: u32,
+    /// Also the light that arrives unscattered from emitters, the sky and delta
+    /// lights. Without it only the indirect light is captured (light reflected by
+    /// surfaces or scattered by the medium on its way), which a surface cache holds
+    /// beside direct lighting sampled per pixel: direct light has the sharp shadows
+    /// that interpolation would blur.
+    pub emitted: bool,
+}
+
 /// The light field at one point.
 #[derive(Clone, Debug, Serialize)]
 pub struct LightField<S: Dim> {
@@ -233,10 +261,8 @@ pub struct LightField<S: Dim> {
     pub sigma_s: Rgb,
     pub sigma_t: Rgb,
     pub g: f64,
-    /// Which angular factor weights the light arriving at x: the phase towards
-    /// ω_o (None), or basis function k of the harmonic moments over ω_o (Some(k);
-    /// `super::moments`).
-    pub moment: Option<usize>,
+    /// Which angular factor weights the light arriving at x (`super::moments`).
+    pub angular: Angular<S::Vec>,
     /// Ray-casting queries spent.
     pub cost_rays: u64,
     pub seconds: f64,
@@ -276,9 +302,11 @@ impl<S: Dim> LightField<S> {
             .map_or(Outgoing::Direction(self.omega_o), Outgoing::TowardsPoint)
     }
 
-    /// The angle (solid angle) per ray, 2π/N (4π/N).
+    /// The angle (solid angle) per ray, 2π/N (4π/N); half that over a surface's
+    /// half circle (hemisphere).
     pub fn ray_measure(&self) -> f64 {
-        S::SPHERE_MEASURE / self.rays.len() as f64
+        let half = matches!(self.angular, Angular::Cosine(_));
+        S::SPHERE_MEASURE / if half { 2.0 } else { 1.0 } / self.rays.len() as f64
     }
 }
 
@@ -294,7 +322,6 @@ pub fn capture<W: World>(
     item: u64,
     progress: &Progress,
 ) -> Result<LightField<W::S>, Cancelled> {
-    let start = std::time::Instant::now();
     let unit = |v: <W::S as Space>::Vec| {
         let l = W::S::length(v);
         if l > 0.0 { v / l } else { W::S::axis(0) }
@@ -303,6 +330,75 @@ pub fn capture<W: World>(
         Outgoing::Direction(w) => (w, None),
         Outgoing::TowardsPoint(e) => (unit(e - x), Some(e)),
     };
+    let n = ps.rays.max(W::S::DIM + 1);
+    let dirs = W::S::directions(n, ps.jitter, mix64(seed ^ mix64(item.wrapping_add(0x9e37))));
+    let simplices = W::S::neighbours(&dirs);
+    let mut lf = trace_field(world, x, (dirs, simplices), None, true, ps, seed, item, progress)?;
+    (lf.omega_o, lf.eye) = (omega_o, eye);
+    Ok(lf)
+}
+
+/// Capture the light field over the hemisphere a surface point receives from, for
+/// its irradiance ([`Angular::Cosine`]; σ_s = 1, no phase): the receiver's rays
+/// skip its primitive, and without `emitted` the light arriving straight from
+/// emitters, the sky and delta lights is left out. Deterministic for (seed, item)
+/// whatever the thread count.
+#[allow(clippy::too_many_arguments)] // the capture's inputs are spelled out
+pub fn capture_surface<W: World>(
+    world: &W,
+    x: <W::S as Space>::Vec,
+    receiver: SurfaceReceiver<<W::S as Space>::Vec>,
+    ps: &ProbeSettings,
+    seed: u64,
+    item: u64,
+    progress: &Progress,
+) -> Result<LightField<W::S>, Cancelled> {
+    let normal = receiver.normal;
+    let n = ps.rays.max(W::S::DIM + 1);
+    let dirs = W::S::hemisphere(n, normal, ps.jitter, mix64(seed ^ mix64(item.wrapping_add(0x9e37))));
+    let simplices = W::S::hemisphere_neighbours(&dirs, normal);
+    // Rays skip the receiver's primitive, and leave from a hair above it: a
+    // neighbour in its plane (or the silhouette test's rays, which skip the hit's
+    // primitive instead) must not meet it at a rounding-level distance.
+    let skip = Some(receiver.prim);
+    let above = x + normal * (1e-9 * world.scale());
+    let mut lf = trace_field(
+        world,
+        above,
+        (dirs, simplices),
+        skip,
+        receiver.emitted,
+        ps,
+        seed,
+        item,
+        progress,
+    )?;
+    lf.omega_o = normal;
+    lf.sigma_s = Rgb::ONE;
+    lf.g = 0.0;
+    lf.angular = Angular::Cosine(normal);
+    Ok(lf)
+}
+
+/// A light field's directions and their neighbours.
+type Directions<S> = (Vec<<S as Space>::Vec>, Vec<<S as Dim>::Simplex<u32>>);
+
+/// The rays of a light field at `x` along `dirs` (with their neighbours), each
+/// skipping `skip`; `emitted`: whether hits keep their emission, escaped rays the
+/// sky, and x its delta lights. The field's ω_o is left to the caller.
+#[allow(clippy::too_many_arguments)] // the capture's inputs are spelled out
+fn trace_field<W: World>(
+    world: &W,
+    x: <W::S as Space>::Vec,
+    (dirs, simplices): Directions<W::S>,
+    skip: Option<u32>,
+    emitted: bool,
+    ps: &ProbeSettings,
+    seed: u64,
+    item: u64,
+    progress: &Progress,
+) -> Result<LightField<W::S>, Cancelled> {
+    let start = std::time::Instant::now();
     let medium = world.medium();
     let at_x = world.medium_at(x);
     let sigma_t_x = at_x.map_or(Rgb::ZERO, |m| m.sigma_t);
@@ -311,14 +407,12 @@ pub fn capture<W: World>(
         sig if sig > 0.0 => (-ps.transmittance_cutoff.ln() / sig).min(far),
         _ => far,
     };
-    let n = ps.rays.max(W::S::DIM + 1);
-    let dirs = W::S::directions(n, ps.jitter, mix64(seed ^ mix64(item.wrapping_add(0x9e37))));
-    let simplices = W::S::neighbours(&dirs);
+    let n = dirs.len();
     // Pass 1: every ray's hit and how far it still has medium in front of it.
     let hits: Vec<(Option<Hit>, f64)> = dirs
         .par_iter()
         .map(|&dir| {
-            let hit = world.closest_hit(x, dir, f64::INFINITY, None);
+            let hit = world.closest_hit(x, dir, f64::INFINITY, skip);
             let end = hit.map_or(limit, |h| h.t.min(limit));
             let medium_end = medium.map_or(0.0, |m| {
                 m.region.pieces(x, dir, end).into_iter().last().map_or(0.0, |(_, b)| b)
@@ -341,7 +435,10 @@ pub fn capture<W: World>(
             let offset = s.next_f64();
             let mut rays = 1u64;
             let hit_record = hit.map(|h| {
-                let (sp, radiance) = radiance_leaving(world, &h, dir, paths, &ps.settings, &mut s, &mut rays);
+                let (sp, mut radiance) = radiance_leaving(world, &h, dir, paths, &ps.settings, &mut s, &mut rays);
+                if !emitted && sp.active {
+                    radiance -= sp.emission;
+                }
                 SurfaceHit {
                     point: sp.point,
                     prim: h.prim,
@@ -352,8 +449,8 @@ pub fn capture<W: World>(
             });
             let length = hit.map_or(t_cut, |h| h.t);
             let escaped = match hit {
-                None => escaped_radiance(world, x, dir, length, sigma_t_x),
-                Some(_) => Rgb::ZERO,
+                None if emitted => escaped_radiance(world, x, dir, length, sigma_t_x),
+                _ => Rgb::ZERO,
             };
             let mut samples = Vec::new();
             let mut slopes = Vec::new();
@@ -427,11 +524,15 @@ pub fn capture<W: World>(
             h.edge = edge;
         }
     }
-    let (direct_lights, c) = world.direct_lights(x);
+    let (direct_lights, c) = if emitted {
+        world.direct_lights(x)
+    } else {
+        (Vec::new(), 0)
+    };
     Ok(LightField {
         x,
-        omega_o,
-        eye,
+        omega_o: W::S::axis(0),
+        eye: None,
         rays: out,
         simplices,
         march,
@@ -439,7 +540,7 @@ pub fn capture<W: World>(
         sigma_s: at_x.map_or(Rgb::ZERO, |m| m.sigma_s),
         sigma_t: sigma_t_x,
         g: at_x.map_or(0.0, |m| m.g()),
-        moment: None,
+        angular: Angular::Phase,
         cost_rays: cost + c,
         seconds: start.elapsed().as_secs_f64(),
     })

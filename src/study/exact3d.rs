@@ -11,6 +11,9 @@
 //! triangles. The integrand is smooth there, so central differences of this
 //! deterministic value give the gradient and Hessian ([`derivatives`]).
 //!
+//! The same integral with the cosine of a receiver in place of the phase is the
+//! exact direct irradiance of a surface point ([`irradiance`]).
+//!
 //! Meant for scenes of emitters and black occluders (reflected light and delta lights
 //! are not included) in a homogeneous medium covering x and the emitters.
 
@@ -101,6 +104,18 @@ pub fn single_scattering(scene: &Scene, x: DVec3, omega_o: DVec3) -> Rgb {
     let Some(m) = scene.medium_at(x) else {
         return Rgb::ZERO;
     };
+    arriving(scene, x, |w| m.phase.eval(-omega_o, w)) * m.sigma_s
+}
+
+/// The irradiance ∫ L max(0, n·ω) dω that the emitting triangles send to `x` on a
+/// receiver with unit normal `n` directly (through the medium, if any). The
+/// integrand is smooth where no emitter crosses the receiver's horizon.
+pub fn irradiance(scene: &Scene, x: DVec3, n: DVec3) -> Rgb {
+    arriving(scene, x, |w| n.dot(w).max(0.0))
+}
+
+/// ∫ weight(ω) T L_e dω over the emitters' parts `x` sees, ω the direction from x.
+fn arriving(scene: &Scene, x: DVec3, weight: impl Fn(DVec3) -> f64) -> Rgb {
     let gl = gauss_legendre(NODES);
     let mut sum = Rgb::ZERO;
     for (e, t) in scene.geometry.prims.iter().enumerate() {
@@ -125,16 +140,15 @@ pub fn single_scattering(scene: &Scene, x: DVec3, omega_o: DVec3) -> Rgb {
                             let r = d.length();
                             let w = d / r;
                             let cos = t.normal.dot(w).abs();
-                            let f = m.phase.eval(-omega_o, w);
                             let jac = 0.25 * wu * wv * u * area2;
-                            sum += surface.emission * scene.transmittance(x, w, r) * (f * cos / (r * r) * jac);
+                            sum += surface.emission * scene.transmittance(x, w, r) * (weight(w) * cos / (r * r) * jac);
                         }
                     }
                 }
             }
         }
     }
-    sum * m.sigma_s
+    sum
 }
 
 /// Triangle (a, b, c) as SPLIT² similar triangles.
@@ -157,6 +171,13 @@ fn split(a: DVec3, b: DVec3, c: DVec3) -> Vec<(DVec3, DVec3, DVec3)> {
 /// step `h` (exact to O(h²) where no visibility event is within h).
 pub fn derivatives(scene: &Scene, x: DVec3, omega_o: DVec3, h: f64) -> TaylorRgb<D3> {
     let channels = Taylor2::central_differences(|p| single_scattering(scene, p, omega_o).to_array(), x, h);
+    TaylorRgb { channels }
+}
+
+/// Value, gradient and Hessian of [`irradiance`] (normal held) by central
+/// differences with step `h`.
+pub fn irradiance_derivatives(scene: &Scene, x: DVec3, n: DVec3, h: f64) -> TaylorRgb<D3> {
+    let channels = Taylor2::central_differences(|p| irradiance(scene, p, n).to_array(), x, h);
     TaylorRgb { channels }
 }
 
