@@ -37,6 +37,19 @@ pub struct CacheSummary {
     /// The records file read (`--records-in`) or written (`--records-out`).
     pub records_in: Option<String>,
     pub records_out: Option<String>,
+    /// The surface cache, when the reflected light was read from one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surfaces: Option<SurfaceSummary>,
+}
+
+/// A surface cache's records and what placing them cost.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SurfaceSummary {
+    pub eps: f64,
+    pub records: usize,
+    pub query_points: u64,
+    pub seconds: f64,
+    pub rays: u64,
 }
 
 impl CacheSummary {

@@ -2,7 +2,7 @@
 //! or read from a records file) and reconstruction of a 3D radiance cache.
 
 use super::common::wrote;
-use super::image3d::CacheSummary;
+use super::image3d::{CacheSummary, SurfaceSummary};
 use clap::Args;
 use std::path::PathBuf;
 use volcache::core::metric::CacheMethod;
@@ -10,12 +10,13 @@ use volcache::output::write_json;
 use volcache::pipeline::record::Cached;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, place, place_with_count,
-    reconstruct,
+    CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, place, place_surfaces,
+    place_with_count, reconstruct,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
 use volcache::volume::render::{RenderParams, Rendered};
 use volcache::volume::scene::Scene;
+use volcache::volume::surface_cache::default_surface_eps;
 
 /// Radiance-cache parameters of `render3d`, `figure compare3d` and `bench tradeoff3d`.
 #[derive(Args, Debug, Clone)]
@@ -46,12 +47,29 @@ pub struct Cache3dArgs {
     /// Reflected-light samples per camera sample at the first surface.
     #[arg(long, default_value_t = 4)]
     pub surface_paths: u32,
-    /// Second-order interpolation (ours).
+    /// Second-order interpolation (ours; also of the surface cache).
     #[arg(long)]
     pub second_order: bool,
+    /// Light reflected by the first surface: path traced per camera sample
+    /// (`none`), or its indirect part from an occlusion-aware second-order
+    /// irradiance cache on the surfaces, direct light sampled per camera sample
+    /// (`ours`).
+    #[arg(long, value_enum, default_value_t = SurfaceCacheArg::None)]
+    pub surface_cache: SurfaceCacheArg,
+    /// Error threshold ε of the surface cache (a volume, scene units³). Default: a
+    /// scene-relative start.
+    #[arg(long)]
+    pub surface_eps: Option<f64>,
     /// Seed of the records' light fields.
     #[arg(long, default_value_t = 1)]
     pub cache_seed: u64,
+}
+
+/// Whether the first surface's reflected light comes from a surface cache.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SurfaceCacheArg {
+    None,
+    Ours,
 }
 
 /// How `render3d` shares records between jobs.
@@ -99,6 +117,17 @@ impl Cache3dArgs {
         if let Some(d) = self.march_step {
             anyhow::ensure!(finite_pos(d), "--march-step must be a positive distance");
             cp.march_step = d;
+        }
+        if self.surface_cache == SurfaceCacheArg::Ours {
+            let e = self.surface_eps.unwrap_or_else(|| default_surface_eps(scene));
+            let (lo, hi) = volcache::limits::EPS;
+            anyhow::ensure!(
+                e.is_finite() && (lo..=hi).contains(&e),
+                "--surface-eps must lie between {lo:e} and {hi:e}, got {e}"
+            );
+            cp.surface_eps = Some(e);
+        } else {
+            anyhow::ensure!(self.surface_eps.is_none(), "--surface-eps needs --surface-cache ours");
         }
         let eps = self.eps.unwrap_or_else(|| default_eps(method, scene));
         let (lo, hi) = volcache::limits::EPS;
@@ -181,12 +210,22 @@ pub fn run_cached(
         uncovered: 0,
         records_in: records.records_in.as_ref().map(|p| p.display().to_string()),
         records_out: records.records_out.as_ref().map(|p| p.display().to_string()),
+        surfaces: None,
     };
     if records.place_only {
         return Ok((None, summary));
     }
+    let surfaces = place_surfaces(scene, &cp, &cs, progress)?;
+    summary.surfaces = surfaces.as_ref().map(|s| SurfaceSummary {
+        eps: s.eps,
+        records: s.record_count(),
+        query_points: s.query_points,
+        seconds: s.seconds,
+        rays: s.rays,
+    });
     let second_order = cs.second_order && method == CacheMethod::Ours;
-    let r = reconstruct(scene, &cp, CacheView::of(&placement), second_order, progress)?;
+    let view = CacheView::of(&placement).with_surfaces(surfaces.as_ref());
+    let r = reconstruct(scene, &cp, view, second_order, progress)?;
     summary.reconstruction_seconds = r.image.seconds;
     summary.reconstruction_rays = r.image.rays;
     summary.uncovered = r.uncovered;
@@ -196,6 +235,10 @@ pub fn run_cached(
     if records.records_in.is_none() {
         img.seconds += placement.seconds;
         img.rays += placement.rays;
+    }
+    if let Some(s) = &surfaces {
+        img.seconds += s.seconds;
+        img.rays += s.rays;
     }
     Ok((Some(img), summary))
 }

@@ -209,26 +209,26 @@ impl<S: Space, V> Cache<S, V> {
         out.sort_unstable_by_key(|&(i, _)| i);
     }
 
-    /// [`Cache::covering_into`] keeping only the records whose position passes
-    /// `keep` (e.g. a record must see y: it never extrapolates across a surface).
-    pub fn covering_where(&self, y: S::Vec, out: &mut Vec<(usize, f64)>, mut keep: impl FnMut(S::Vec) -> bool) {
+    /// [`Cache::covering_into`] keeping only the records that pass `keep(index,
+    /// position)` (e.g. a record must see y: it never extrapolates across a surface).
+    pub fn covering_where(&self, y: S::Vec, out: &mut Vec<(usize, f64)>, mut keep: impl FnMut(usize, S::Vec) -> bool) {
         self.covering_into(y, out);
-        out.retain(|&(i, _)| keep(self.shapes[i].0));
+        out.retain(|&(i, _)| keep(i, self.shapes[i].0));
     }
 
     /// Some record covers y.
     pub fn is_covered(&self, y: S::Vec) -> bool {
-        self.is_covered_where(y, |_| true)
+        self.is_covered_where(y, |_, _| true)
     }
 
     /// Some record whose position passes `keep` covers y (`keep` is called only
     /// until one is found).
-    pub fn is_covered_where(&self, y: S::Vec, mut keep: impl FnMut(S::Vec) -> bool) -> bool {
+    pub fn is_covered_where(&self, y: S::Vec, mut keep: impl FnMut(usize, S::Vec) -> bool) -> bool {
         let mut covered = false;
         self.index.for_candidates(to_array::<S>(y), S::DIM, |id| {
             if !covered {
                 let (x, e) = &self.shapes[id as usize];
-                covered = e.contains(*x, y) && keep(*x);
+                covered = e.contains(*x, y) && keep(id as usize, *x);
             }
         });
         covered
@@ -275,7 +275,7 @@ impl<S: Space, V: Interpolant<S>> Cache<S, V> {
 
     /// [`Cache::interpolate`] with a reused scratch buffer (no allocation per query).
     pub fn interpolate_with(&self, y: S::Vec, second_order: bool, scratch: &mut Vec<(usize, f64)>) -> Option<V::Out> {
-        self.interpolate_where(y, second_order, scratch, |_| true)
+        self.interpolate_where(y, second_order, scratch, |_, _| true)
     }
 
     /// [`Cache::interpolate`] from the covering records whose position passes `keep`
@@ -285,7 +285,7 @@ impl<S: Space, V: Interpolant<S>> Cache<S, V> {
         y: S::Vec,
         second_order: bool,
         scratch: &mut Vec<(usize, f64)>,
-        keep: impl FnMut(S::Vec) -> bool,
+        keep: impl FnMut(usize, S::Vec) -> bool,
     ) -> Option<V::Out> {
         self.covering_where(y, scratch, keep);
         let total: f64 = scratch.iter().map(|&(_, w)| w).sum();

@@ -27,6 +27,7 @@ pub mod record;
 pub mod sensor;
 pub mod silhouette;
 pub mod slide;
+pub mod surface_cache;
 pub mod surface_record;
 #[cfg(test)]
 mod testing;

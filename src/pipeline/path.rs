@@ -349,6 +349,46 @@ pub fn radiance_leaving<W: World>(
     (sp, l)
 }
 
+/// One sample of the light arriving at `x` unscattered — from delta lights, from
+/// lights with an extent by NEE, and along one lobe-sampled ray to the emitter or
+/// sky it meets, MIS-combined as in [`sample_at`] and weighted by the ray's
+/// transmittance (no free flight: nothing scattered is counted) — weighted by
+/// `lobe`. The direct lighting a surface cache leaves to every pixel
+/// (`super::surface_cache`); the rest of [`sample_at`]'s value is what its records
+/// hold.
+pub fn direct_at<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    lobe: &Lobe<W::S>,
+    skip: Option<u32>,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Rgb {
+    let mut l = world.nee(x, lobe, skip, true, s, rays);
+    let (w, weight, pdf) = lobe.sample(s);
+    if weight == Rgb::ZERO {
+        return l;
+    }
+    *rays += 1;
+    // The lobe strategy's MIS density includes passing the medium, as the path
+    // tracer's (so the two weights still sum to one with NEE's).
+    match world.closest_hit(x, w, f64::INFINITY, skip) {
+        None => {
+            let tr = world.transmittance(x, w, world.world_exit(x, w));
+            l += weight * tr * world.escaped(w, Some(pdf * pass_probability(tr)));
+        }
+        Some(h) => {
+            let sp = world.surface(&h, w);
+            if sp.active && sp.emission != Rgb::ZERO {
+                let tr = world.transmittance(x, w, h.t);
+                let mis = power_heuristic(pdf * pass_probability(tr), world.emitter_pdf(x, h.prim, sp.point));
+                l += weight * tr * sp.emission * mis;
+            }
+        }
+    }
+    l
+}
+
 /// What to estimate at a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Query<S: Dim> {

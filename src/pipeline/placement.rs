@@ -132,65 +132,53 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
     for (table, cache) in moments.iter_mut().zip(&caches) {
         table.resize(cache.len(), RecordMoments::default());
     }
-    let (mut query_points, mut rays, mut records_seconds, mut capture_wall) = (0u64, 0u64, 0.0, 0.0);
+    let (mut records_seconds, mut capture_wall) = (0.0, 0.0);
     let uncovered = |caches: &[RadianceCache<W::S>], y, rays: &mut u64| -> Vec<usize> {
         (0..caches.len())
-            .filter(|&c| !caches[c].is_covered_where(y, |x| sees(world, x, y, rays)))
+            .filter(|&c| !caches[c].is_covered_where(y, |_, x| sees(world, x, y, rays)))
             .collect()
     };
-    for batch in (0..units).collect::<Vec<_>>().chunks(BATCH) {
-        progress.check()?;
-        // Per unit: its points with uncovered caches, its point count, the checks' rays.
-        type Pending<S> = (Vec<QueryPoint<S>>, u64, u64);
-        let pending: Vec<Pending<W::S>> = batch
-            .par_iter()
-            .map(|&k| {
-                let (mut points, mut r) = (Vec::new(), 0u64);
-                source.points(k, &mut points);
-                let n = points.len() as u64;
-                points.retain(|p| !uncovered(&caches, p.y, &mut r).is_empty());
-                (points, n, r)
-            })
-            .collect();
-        for (points, n, r) in pending {
-            query_points += n;
-            rays += r;
-            for p in points {
-                let missing = uncovered(&caches, p.y, &mut rays);
-                if missing.is_empty() {
-                    continue;
+    let (query_points, rays) = walk(
+        units,
+        progress,
+        &mut caches,
+        |k, out| source.points(k, out),
+        |caches, p: &QueryPoint<W::S>, rays| !uncovered(caches, p.y, rays).is_empty(),
+        |caches, p, rays| {
+            let missing = uncovered(caches, p.y, rays);
+            if missing.is_empty() {
+                return Ok(());
+            }
+            let d = match memo.entry(p.key) {
+                Entry::Occupied(e) => e.into_mut(),
+                Entry::Vacant(e) => {
+                    let t = Instant::now();
+                    let d = compute_record(world, p.y, source.outgoing(p.y), cs, p.id, progress)?;
+                    capture_wall += t.elapsed().as_secs_f64();
+                    e.insert(d)
                 }
-                let d = match memo.entry(p.key) {
-                    Entry::Occupied(e) => e.into_mut(),
-                    Entry::Vacant(e) => {
-                        let t = Instant::now();
-                        let d = compute_record(world, p.y, source.outgoing(p.y), cs, p.id, progress)?;
-                        capture_wall += t.elapsed().as_secs_f64();
-                        e.insert(d)
-                    }
+            };
+            *rays += d.rays;
+            records_seconds += d.seconds;
+            for c in missing {
+                let value = d.payload(cached[c]);
+                let record = Record {
+                    position: p.y,
+                    value,
+                    extent: cs
+                        .method
+                        .extent(&value.luminance(), d.metric_hessian(cached[c]), &metric),
+                    cost_rays: d.rays,
                 };
-                rays += d.rays;
-                records_seconds += d.seconds;
-                for c in missing {
-                    let value = d.payload(cached[c]);
-                    let record = Record {
-                        position: p.y,
-                        value,
-                        extent: cs
-                            .method
-                            .extent(&value.luminance(), d.metric_hessian(cached[c]), &metric),
-                        cost_rays: d.rays,
-                    };
-                    // A non-finite light field is refused by the cache: the point stays
-                    // uncovered (reported by the reconstruction) rather than failing.
-                    if caches[c].insert(record).is_ok() {
-                        moments[c].push(d.moment_payload(cached[c]));
-                    }
+                // A non-finite light field is refused by the cache: the point stays
+                // uncovered (reported by the reconstruction) rather than failing.
+                if caches[c].insert(record).is_ok() {
+                    moments[c].push(d.moment_payload(cached[c]));
                 }
             }
-        }
-        progress.advance(batch.len() as u64);
-    }
+            Ok(())
+        },
+    )?;
     Ok(Placement {
         caches,
         cached: cached.to_vec(),
@@ -200,6 +188,46 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
         rays,
         seconds: start.elapsed().as_secs_f64() - capture_wall + records_seconds,
     })
+}
+
+/// The walk every placement shares: units in batches of [`BATCH`], each unit's
+/// points kept in parallel where `open` says a record is missing against the state
+/// at the batch's start, then `fill`ed in order (which re-checks: a point filled
+/// earlier in the batch may cover it now). Covered points stay covered as records
+/// are added, so the result is that of a sequential walk whatever the thread
+/// count. Returns the points visited and the checks' rays (`fill` adds its own).
+pub(super) fn walk<P: Send, St: Sync>(
+    units: usize,
+    progress: &Progress,
+    state: &mut St,
+    points: impl Fn(usize, &mut Vec<P>) + Sync,
+    open: impl Fn(&St, &P, &mut u64) -> bool + Sync,
+    mut fill: impl FnMut(&mut St, P, &mut u64) -> Result<(), Cancelled>,
+) -> Result<(u64, u64), Cancelled> {
+    let (mut query_points, mut rays) = (0u64, 0u64);
+    for batch in (0..units).collect::<Vec<_>>().chunks(BATCH) {
+        progress.check()?;
+        // Per unit: its points still open, its point count, the checks' rays.
+        let pending: Vec<(Vec<P>, u64, u64)> = batch
+            .par_iter()
+            .map(|&k| {
+                let (mut out, mut r) = (Vec::new(), 0u64);
+                points(k, &mut out);
+                let n = out.len() as u64;
+                out.retain(|p| open(state, p, &mut r));
+                (out, n, r)
+            })
+            .collect();
+        for (open_points, n, r) in pending {
+            query_points += n;
+            rays += r;
+            for p in open_points {
+                fill(state, p, &mut rays)?;
+            }
+        }
+        progress.advance(batch.len() as u64);
+    }
+    Ok((query_points, rays))
 }
 
 /// Why an equal-count placement has no result.
@@ -286,7 +314,7 @@ fn interpolate_by<W: World>(
     rays: &mut u64,
     payload: impl Fn(usize) -> TaylorRgb<W::S>,
 ) -> Option<Rgb> {
-    cache.covering_where(y, scratch, |x| sees(world, x, y, rays));
+    cache.covering_where(y, scratch, |_, x| sees(world, x, y, rays));
     let total: f64 = scratch.iter().map(|&(_, w)| w).sum();
     if total <= 0.0 {
         return None;

@@ -32,6 +32,8 @@ pub fn comparison_image(scene: &Scene, res: Option<[usize; 2]>, spp: u32, seed: 
 pub struct Run3d {
     pub method: String,
     pub records: usize,
+    /// Records of the surface cache (zero without one).
+    pub surface_records: usize,
     pub eps: Option<f64>,
     pub spp: u32,
     pub seconds: f64,
@@ -52,6 +54,7 @@ impl Run3d {
         Run3d {
             method: method.into(),
             records: 0,
+            surface_records: 0,
             eps: None,
             spp: image.spp,
             seconds: image.seconds,
@@ -74,8 +77,8 @@ pub fn method_name(method: CacheMethod) -> &'static str {
     }
 }
 
-/// `cs.method` at `target` records (or at `cs.eps`), timed as placement plus
-/// reconstruction.
+/// `cs.method` at `target` records (or at `cs.eps`), timed as placement (with the
+/// surface cache's, when `cp` asks for one) plus reconstruction.
 pub fn cache_run(
     scene: &Scene,
     cs: &CacheSettings,
@@ -86,13 +89,18 @@ pub fn cache_run(
     progress: &Progress,
 ) -> Result<Run3d, CountError> {
     let r = render_cached(scene, cp, cs, target, memo, progress)?;
-    let placement = r.placement;
+    let (placement, surfaces) = (r.placement, r.surfaces);
     let mut run = Run3d::rendered(method_name(cs.method), r.reconstruction.image, reference);
     run.records = placement.record_count();
     run.eps = Some(placement.eps);
     run.placement_seconds = placement.seconds;
-    run.seconds = placement.seconds + run.reconstruction_seconds;
     run.rays += placement.rays;
+    if let Some(s) = &surfaces {
+        run.surface_records = s.record_count();
+        run.placement_seconds += s.seconds;
+        run.rays += s.rays;
+    }
+    run.seconds = run.placement_seconds + run.reconstruction_seconds;
     run.record_list = placement.records().concat();
     Ok(run)
 }

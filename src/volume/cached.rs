@@ -14,7 +14,9 @@
 //! also decides the records' methods and values) are the window's camera samples'
 //! march points ([`super::camera_march`]), pixel by pixel in a coarse-to-fine order.
 
-pub use super::cached_params::{CacheView, CachedRenderParams, Placement, RadianceCache, RecordInfo, RecordMemo};
+pub use super::cached_params::{
+    CacheView, CachedRenderParams, Placement, RadianceCache, RecordInfo, RecordMemo, SurfaceCache, SurfaceMemo,
+};
 use super::camera::Camera;
 use super::camera_march::CameraRay;
 pub use super::reconstruct::{Reconstruction, march_reference, reconstruct};
@@ -156,17 +158,20 @@ pub fn place_with_count(
 #[derive(Clone, Debug)]
 pub struct CachedRender {
     pub placement: Placement,
+    /// The surface cache, when the reflected light is read from one
+    /// (`CachedRenderParams::surface_eps`).
+    pub surfaces: Option<SurfaceCache>,
     pub reconstruction: Reconstruction,
 }
 
 impl CachedRender {
-    /// Placement plus reconstruction.
+    /// Placements plus reconstruction.
     pub fn seconds(&self) -> f64 {
-        self.placement.seconds + self.reconstruction.image.seconds
+        self.placement.seconds + self.surfaces.as_ref().map_or(0.0, |s| s.seconds) + self.reconstruction.image.seconds
     }
 
     pub fn rays(&self) -> u64 {
-        self.placement.rays + self.reconstruction.image.rays
+        self.placement.rays + self.surfaces.as_ref().map_or(0, |s| s.rays) + self.reconstruction.image.rays
     }
 }
 
@@ -200,6 +205,21 @@ pub fn render_cached_onto(
     reconstructed(scene, params, cs, placement, progress)
 }
 
+/// The surface cache of the window, when `params.surface_eps` asks for one (its
+/// records as `surface_cache::surface_settings` makes them from `cs`).
+pub fn place_surfaces(
+    scene: &Scene,
+    params: &CachedRenderParams,
+    cs: &CacheSettings,
+    progress: &Progress,
+) -> Result<Option<SurfaceCache>, Cancelled> {
+    let Some(eps) = params.surface_eps else {
+        return Ok(None);
+    };
+    let settings = super::surface_cache::surface_settings(cs, eps);
+    super::surface_cache::place(scene, params, &settings, &mut SurfaceMemo::new(), progress).map(Some)
+}
+
 fn reconstructed(
     scene: &Scene,
     params: &CachedRenderParams,
@@ -208,9 +228,12 @@ fn reconstructed(
     progress: &Progress,
 ) -> Result<CachedRender, Cancelled> {
     let second_order = cs.second_order && cs.method == CacheMethod::Ours;
-    let reconstruction = reconstruct(scene, params, CacheView::of(&placement), second_order, progress)?;
+    let surfaces = place_surfaces(scene, params, cs, progress)?;
+    let view = CacheView::of(&placement).with_surfaces(surfaces.as_ref());
+    let reconstruction = reconstruct(scene, params, view, second_order, progress)?;
     Ok(CachedRender {
         placement,
+        surfaces,
         reconstruction,
     })
 }

@@ -13,6 +13,8 @@ pub type RecordMemo = crate::pipeline::placement::RecordMemo<D3>;
 pub type RadianceCache = crate::pipeline::placement::RadianceCache<D3>;
 pub type Placement = crate::pipeline::placement::Placement<D3>;
 pub type RecordInfo = crate::pipeline::record::RecordInfo<D3>;
+pub type SurfaceCache = crate::pipeline::surface_cache::SurfaceCache<D3>;
+pub type SurfaceMemo = crate::pipeline::surface_cache::SurfaceMemo<D3>;
 
 /// The image a cached render covers and how camera rays are marched.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -25,6 +27,11 @@ pub struct CachedRenderParams {
     /// surface: surfaces are path traced as in the reference, at a cost far below
     /// a record's, so they need not be the noise floor of a cached image.
     pub surface_paths: u32,
+    /// ε of a surface cache (`super::surface_cache`: indirect irradiance cached,
+    /// direct light sampled with `surface_paths` samples), or None: the reflected
+    /// light is path traced. (Left out of JSON when None.)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_eps: Option<f64>,
 }
 
 impl CachedRenderParams {
@@ -33,6 +40,7 @@ impl CachedRenderParams {
             image: RenderParams::from_scene(scene),
             march_step: scene.scale / 128.0,
             surface_paths: 4,
+            surface_eps: None,
         }
     }
 }
@@ -45,12 +53,18 @@ pub struct CacheView<'a> {
     pub cache: &'a RadianceCache,
     /// Per record, its moments (all of bands 0..=L), if every record has them.
     pub moments: Option<&'a [RecordMoments<D3>]>,
+    /// A surface cache, if surfaces are read from one.
+    pub surfaces: Option<&'a SurfaceCache>,
 }
 
 impl<'a> CacheView<'a> {
     /// The records alone, as stored.
     pub fn records(cache: &'a RadianceCache) -> Self {
-        CacheView { cache, moments: None }
+        CacheView {
+            cache,
+            moments: None,
+            surfaces: None,
+        }
     }
 
     /// A placement's first cache, with its moments when it has them.
@@ -60,6 +74,12 @@ impl<'a> CacheView<'a> {
         CacheView {
             cache: &placement.caches[0],
             moments: (complete && !table.is_empty()).then_some(table.as_slice()),
+            surfaces: None,
         }
+    }
+
+    /// The same with the surfaces read from `surfaces`.
+    pub fn with_surfaces(self, surfaces: Option<&'a SurfaceCache>) -> Self {
+        CacheView { surfaces, ..self }
     }
 }

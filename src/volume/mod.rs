@@ -22,4 +22,5 @@ pub mod render;
 pub mod scene;
 pub mod scene_desc;
 mod scene_world;
+pub mod surface_cache;
 pub mod validate;

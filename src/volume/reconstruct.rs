@@ -9,8 +9,10 @@
 use super::cached_params::{CacheView, CachedRenderParams};
 use super::camera_march::CameraRay;
 use super::lights::Lobe;
+use super::mesh::Hit;
 use super::render::{Rendered, camera};
 use super::scene::Scene;
+use super::surface_cache::surface_radiance;
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::{Sampler, mix64};
 use crate::core::space::D3;
@@ -48,7 +50,24 @@ pub fn reconstruct(
     let mut weights: (DVec3, Vec<f64>) = (DVec3::ZERO, Vec::new());
     let g = scene.medium.as_ref().map_or(0.0, |m| m.g());
     let cache = view.cache;
-    march_image(scene, params, progress, move |p, lobe, sigma_s, s, rays| {
+    let mut surface_scratch: Vec<(usize, f64)> = Vec::new();
+    let paths = params.surface_paths;
+    let surface = move |hit: &Hit, dir: DVec3, s: &mut Sampler, rays: &mut u64| {
+        let cached = view.surfaces.and_then(|sc| {
+            surface_radiance(
+                scene,
+                sc,
+                hit,
+                dir,
+                (paths, second_order),
+                &mut surface_scratch,
+                s,
+                rays,
+            )
+        });
+        cached.unwrap_or_else(|| radiance_leaving(scene, hit, dir, paths, &params.image.settings, s, rays).1)
+    };
+    march_image(scene, params, progress, surface, move |p, lobe, sigma_s, s, rays| {
         let direct = scene.direct_part(p, lobe, s, rays) * sigma_s;
         let cached = match (view.moments, lobe) {
             (Some(table), Lobe::Phase { travel, .. }) => {
@@ -83,7 +102,10 @@ pub fn march_reference(
     progress: &Progress,
 ) -> Result<Reconstruction, Cancelled> {
     let paths = paths.max(1);
-    march_image(scene, params, progress, |p, lobe, sigma_s, _, rays| {
+    let surface = |hit: &Hit, dir: DVec3, s: &mut Sampler, rays: &mut u64| {
+        radiance_leaving(scene, hit, dir, params.surface_paths, &params.image.settings, s, rays).1
+    };
+    march_image(scene, params, progress, surface, |p, lobe, sigma_s, _, rays| {
         let point = mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits())));
         let mut s = Sampler::new(path_seed, point);
         let mut sum = Rgb::ZERO;
@@ -94,15 +116,18 @@ pub fn march_reference(
     })
 }
 
-/// The camera-march image with L_s(p) towards the camera from `l_s(p, phase lobe,
-/// σ_s, stream, rays)` (None: not covered, counted and taken as zero).
-fn march_image<F>(
+/// The camera-march image with L_o at the first surface from `surface(hit,
+/// direction, stream, rays)` and L_s(p) towards the camera from `l_s(p, phase
+/// lobe, σ_s, stream, rays)` (None: not covered, counted and taken as zero).
+fn march_image<G, F>(
     scene: &Scene,
     params: &CachedRenderParams,
     progress: &Progress,
+    surface: G,
     l_s: F,
 ) -> Result<Reconstruction, Cancelled>
 where
+    G: FnMut(&Hit, DVec3, &mut Sampler, &mut u64) -> Rgb + Clone + Send + Sync,
     F: FnMut(DVec3, &Lobe, Rgb, &mut Sampler, &mut u64) -> Option<Rgb> + Clone + Send + Sync,
 {
     let start = Instant::now();
@@ -117,7 +142,7 @@ where
     let rows: Vec<Row> = (y0..y1)
         .into_par_iter()
         .map(|j| {
-            let mut l_s = l_s.clone();
+            let (mut l_s, mut surface) = (l_s.clone(), surface.clone());
             let (mut rays, mut uncovered) = (0u64, 0u64);
             let mut row = Vec::with_capacity(w);
             for i in x0..x1 {
@@ -134,10 +159,7 @@ where
                         .map_or(Rgb::ONE, |m| m.transmittance(ray.origin, ray.dir, end));
                     let surface = t_end
                         * match &ray.hit {
-                            Some(hit) => {
-                                let paths = params.surface_paths;
-                                radiance_leaving(scene, hit, ray.dir, paths, &ip.settings, &mut s, &mut rays).1
-                            }
+                            Some(hit) => surface(hit, ray.dir, &mut s, &mut rays),
                             None => scene.escaped(ray.dir, None),
                         };
                     let mut medium = Rgb::ZERO;
