@@ -8,7 +8,8 @@
 //! medium pays nothing for it. The direct part (point lights, suns with or without a
 //! cone) is sampled at every march point, never cached: it is singular at shadow
 //! edges and costs one shadow ray. Light from surfaces seen by the camera (T L_o)
-//! is path traced per camera sample, as in the reference.
+//! is path traced per camera sample, as in the reference, or read from a surface
+//! cache (`CachedRenderParams::surface_eps`, [`super::surface_cache`]).
 //!
 //! The query points of the pipeline's placement (`pipeline::placement`, which
 //! also decides the records' methods and values) are the window's camera samples'

@@ -6,7 +6,8 @@
 //!
 //! scene_desc (JSON) → validate → scene (triangles, BVH, lights, medium) →
 //! render (progressive path-traced image), or camera_march (query points) →
-//! cached (pipeline placement; reconstruction) → records_file (shared by tiles).
+//! cached (pipeline placement; reconstruction; surface_cache for the first
+//! surfaces) → records_file (shared by tiles).
 
 pub mod cached;
 pub mod cached_params;

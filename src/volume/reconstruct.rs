@@ -1,7 +1,8 @@
 //! Reconstruction of a cached 3D render, and its path-traced twin.
 //!
 //! Both walk the window's camera samples ([`super::camera_march`]): per sample,
-//! T L_o at the first surface (path traced with `surface_paths` samples) plus
+//! T L_o at the first surface (path traced with `surface_paths` samples, or from
+//! the surface cache in a cached render that has one) plus
 //! Σ_n T(t_n) Δ L_s(t_n) over its march points, where L_s comes from the cache (with
 //! the direct part sampled at the point) or is path traced. Sharing the camera rays,
 //! march points and surface samples, the two differ only by the cache's error.
