@@ -81,6 +81,48 @@ fn time_budget_limits_the_samples() {
     assert!(spp >= 1 && secs < 2.0, "{spp} spp in {secs} s");
 }
 
+/// A cache method honours a time budget too: records first, then camera samples
+/// beyond the placed ones while the budget lasts (points no record covers are path
+/// traced and counted).
+#[test]
+fn a_cached_render_spends_its_time_budget_on_camera_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = volcache()
+        .args([
+            "render3d",
+            "scenes3d/fog_box.json",
+            "--method",
+            "ours",
+            "--res",
+            "16x12",
+            "--rays",
+            "256",
+            "--steps",
+            "8",
+            "--spp",
+            "2",
+            "--surface-cache",
+            "ours",
+            "--time-budget",
+            "6",
+            "--quiet",
+            "--out",
+        ])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("fog_box_ours.json")).unwrap()).unwrap();
+    let (spp, secs) = (json["spp"].as_u64().unwrap(), json["seconds"].as_f64().unwrap());
+    let cache = &json["cache"];
+    assert!(spp > 2, "only the placed camera samples: {spp}");
+    assert!(secs < 6.0 * 1.5, "{spp} spp in {secs} s");
+    assert!(cache["surfaces"]["records"].as_u64().unwrap() > 0);
+    let placed = cache["placement_seconds"].as_f64().unwrap() + cache["surfaces"]["seconds"].as_f64().unwrap();
+    assert!(placed < secs, "records {placed} s of {secs} s");
+}
+
 #[test]
 fn bad_input_is_a_clear_error() {
     let fails_with = |args: &[&str], want: &str| {
@@ -98,7 +140,7 @@ fn bad_input_is_a_clear_error() {
     fails_with(&["render3d", s, "--res", "10x10", "--crop", "0,0,11,5"], "--crop");
     fails_with(&["render3d", "does/not/exist.json"], "does/not/exist.json");
     fails_with(
-        &["render3d", s, "--method", "ours", "--time-budget", "5"],
+        &["render3d", s, "--method", "ours", "--time-budget", "0"],
         "--time-budget",
     );
     fails_with(&["render3d", s, "--method", "ours", "--rays", "2"], "--rays");

@@ -73,7 +73,10 @@ pub struct Render3dArgs {
     /// Seed of the per-(pixel, sample) random streams.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// pt only: stop adding samples before a pass that would exceed this many seconds.
+    /// Stop adding camera samples before a pass that would exceed this many seconds
+    /// in all. Cache methods: the records' placement counts, and --spp is the camera
+    /// samples placement visits (default 4); the time left adds camera samples
+    /// (interpolation is cheap), points no record covers being path traced.
     #[arg(long)]
     pub time_budget: Option<f64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full image (same samples as
@@ -137,11 +140,6 @@ pub fn summary(scene: &Scene, method: Method, params: &RenderParams, img: &Rende
 }
 
 pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
-    anyhow::ensure!(
-        a.time_budget.is_none() || a.method == Method::Pt,
-        "--time-budget applies to --method pt; cache methods are compared with path tracing at equal time by \
-         `volcache figure compare3d` and `volcache bench tradeoff3d`"
-    );
     let scene = Scene::load(&a.scene)?;
     let stem = a
         .scene
@@ -157,7 +155,11 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
             "--time-budget must be a positive number of seconds"
         );
         params.time_budget = Some(b);
-        params.spp = a.spp.unwrap_or(1 << 24);
+        params.spp = match a.method {
+            Method::Pt => a.spp.unwrap_or(1 << 24),
+            // --spp is then the camera samples placement visits; more follow.
+            _ => 1 << 24,
+        };
     } else if let Some(s) = a.spp {
         check_spp("--spp", s, limits::MAX_SPP)?;
         params.spp = s;
@@ -185,7 +187,10 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         None => render(&scene, &params, &progress)
             .map(|img| (Some(img), None))
             .map_err(anyhow::Error::from),
-        Some(m) => run_cached(&scene, &params, m, &a.cache, &a.records, &progress).map(|(img, c)| (img, Some(c))),
+        Some(m) => {
+            let place_spp = a.time_budget.map(|_| a.spp.unwrap_or(4));
+            run_cached(&scene, (&params, place_spp), m, &a.cache, &a.records, &progress).map(|(img, c)| (img, Some(c)))
+        }
     };
     ui.finish();
     let (img, cache) = match result {

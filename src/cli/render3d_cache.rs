@@ -1,7 +1,7 @@
 //! `volcache render3d --method ours|jarosz08`: placement (at ε, at a record count,
 //! or read from a records file) and reconstruction of a 3D radiance cache.
 
-use super::common::wrote;
+use super::common::{check_spp, wrote};
 use super::image3d::{CacheSummary, SurfaceSummary};
 use clap::Args;
 use std::path::PathBuf;
@@ -10,8 +10,8 @@ use volcache::output::write_json;
 use volcache::pipeline::record::Cached;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, place, place_surfaces,
-    place_with_count, reconstruct,
+    CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, image_after, place,
+    place_surfaces, place_with_count, reconstruct,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
 use volcache::volume::render::{RenderParams, Rendered};
@@ -149,16 +149,22 @@ impl Cache3dArgs {
     }
 }
 
-/// Place (or load) and reconstruct. Returns no image with `--place-only`.
+/// Place (or load) and reconstruct (`place_spp`: the camera samples placement
+/// visits, when the image takes more within a time budget). Returns no image with
+/// `--place-only`.
 pub fn run_cached(
     scene: &Scene,
-    image: &RenderParams,
+    (image, place_spp): (&RenderParams, Option<u32>),
     method: CacheMethod,
     a: &Cache3dArgs,
     records: &RecordsArgs,
     progress: &Progress,
 ) -> anyhow::Result<(Option<Rendered>, CacheSummary)> {
-    let (cs, cp) = a.settings(scene, image, method)?;
+    let (cs, mut cp) = a.settings(scene, image, method)?;
+    if let Some(p) = place_spp {
+        check_spp("--spp", p, volcache::limits::MAX_SPP)?;
+        cp.place_spp = Some(p);
+    }
     let placement = match &records.records_in {
         Some(path) => {
             let (file, cache) = RecordsFile::load(path).map_err(|e| anyhow::anyhow!("--records-in {e}"))?;
@@ -225,7 +231,13 @@ pub fn run_cached(
     });
     let second_order = cs.second_order && method == CacheMethod::Ours;
     let view = CacheView::of(&placement).with_surfaces(surfaces.as_ref());
-    let r = reconstruct(scene, &cp, view, second_order, progress)?;
+    // A time budget is the whole method's: what records took is not left for the image.
+    let spent = if records.records_in.is_none() {
+        placement.seconds
+    } else {
+        0.0
+    } + surfaces.as_ref().map_or(0.0, |s| s.seconds);
+    let r = reconstruct(scene, &image_after(&cp, spent), view, second_order, progress)?;
     summary.reconstruction_seconds = r.image.seconds;
     summary.reconstruction_rays = r.image.rays;
     summary.uncovered = r.uncovered;

@@ -86,7 +86,7 @@ impl QuerySource<D3> for CameraSamples<'_> {
     fn points(&self, k: usize, out: &mut Vec<QueryPoint<D3>>) {
         let pixel = self.order[k];
         let ip = &self.params.image;
-        for sample in 0..ip.spp {
+        for sample in 0..self.params.placed_spp() {
             let (ray, _) = CameraRay::trace(self.scene, &self.cam, pixel, sample, ip.seed);
             for (i, t, _) in ray.march(self.params.march_step) {
                 let (p, k, i) = (pixel as u64, sample as u64, i as u64);
@@ -221,6 +221,14 @@ pub fn place_surfaces(
     super::surface_cache::place(scene, params, &settings, &mut SurfaceMemo::new(), progress).map(Some)
 }
 
+/// The image's parameters once `spent` seconds went to records: what is left of a
+/// time budget (the placed camera samples are rendered whatever it is).
+pub fn image_after(params: &CachedRenderParams, spent: f64) -> CachedRenderParams {
+    let mut p = params.clone();
+    p.image.time_budget = params.image.time_budget.map(|b| (b - spent).max(0.0));
+    p
+}
+
 fn reconstructed(
     scene: &Scene,
     params: &CachedRenderParams,
@@ -231,7 +239,8 @@ fn reconstructed(
     let second_order = cs.second_order && cs.method == CacheMethod::Ours;
     let surfaces = place_surfaces(scene, params, cs, progress)?;
     let view = CacheView::of(&placement).with_surfaces(surfaces.as_ref());
-    let reconstruction = reconstruct(scene, params, view, second_order, progress)?;
+    let spent = placement.seconds + surfaces.as_ref().map_or(0.0, |s| s.seconds);
+    let reconstruction = reconstruct(scene, &image_after(params, spent), view, second_order, progress)?;
     Ok(CachedRender {
         placement,
         surfaces,

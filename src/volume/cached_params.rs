@@ -19,7 +19,8 @@ pub type SurfaceMemo = crate::pipeline::surface_cache::SurfaceMemo<D3>;
 /// The image a cached render covers and how camera rays are marched.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CachedRenderParams {
-    /// Size, window, camera samples per pixel, seed, path settings (no time budget).
+    /// Size, window, camera samples per pixel, seed, path settings; a time budget
+    /// bounds the whole cached render (records and image).
     pub image: RenderParams,
     /// Distance Δ between march points along camera rays (scene units).
     pub march_step: f64,
@@ -32,6 +33,11 @@ pub struct CachedRenderParams {
     /// light is path traced. (Left out of JSON when None.)
     #[serde(skip_serializing_if = "Option::is_none")]
     pub surface_eps: Option<f64>,
+    /// Camera samples per pixel whose query points placement visits (None: all of
+    /// `image.spp`). With `image.time_budget` the reconstruction renders these,
+    /// then more while the budget lasts; points no record covers are path traced.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub place_spp: Option<u32>,
 }
 
 impl CachedRenderParams {
@@ -41,7 +47,14 @@ impl CachedRenderParams {
             march_step: scene.scale / 128.0,
             surface_paths: 4,
             surface_eps: None,
+            place_spp: None,
         }
+    }
+
+    /// Camera samples per pixel placement visits (at least 1, at most `image.spp`).
+    pub fn placed_spp(&self) -> u32 {
+        let spp = self.image.spp.max(1);
+        self.place_spp.map_or(spp, |p| p.clamp(1, spp))
     }
 }
 

@@ -14,6 +14,7 @@ pub mod cached_params;
 pub mod camera;
 pub mod camera_march;
 pub mod lights;
+mod march_image;
 pub mod medium;
 pub mod mesh;
 pub mod orbit;

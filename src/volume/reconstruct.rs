@@ -8,13 +8,13 @@
 //! march points and surface samples, the two differ only by the cache's error.
 
 use super::cached_params::{CacheView, CachedRenderParams};
-use super::camera_march::CameraRay;
 use super::lights::Lobe;
+use super::march_image::march_image;
 use super::mesh::Hit;
-use super::render::{Rendered, camera};
+use super::render::Rendered;
 use super::scene::Scene;
 use super::surface_cache::surface_radiance;
-use crate::core::color::{Rgb, luminance};
+use crate::core::color::Rgb;
 use crate::core::rng::{Sampler, mix64};
 use crate::core::space::D3;
 use crate::pipeline::moments::{MomentQuery, weights_towards};
@@ -23,8 +23,6 @@ use crate::pipeline::placement::{interpolate, interpolate_moments};
 use crate::pipeline::world::World;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
-use rayon::prelude::*;
-use std::time::Instant;
 
 /// A reconstructed image and its cost.
 #[derive(Clone, Debug)]
@@ -51,6 +49,7 @@ pub fn reconstruct(
     let mut weights: (DVec3, Vec<f64>) = (DVec3::ZERO, Vec::new());
     let g = scene.medium.as_ref().map_or(0.0, |m| m.g());
     let cache = view.cache;
+    let settings = &params.image.settings;
     let mut surface_scratch: Vec<(usize, f64)> = Vec::new();
     let paths = params.surface_paths;
     let surface = move |hit: &Hit, dir: DVec3, s: &mut Sampler, rays: &mut u64| {
@@ -85,7 +84,15 @@ pub fn reconstruct(
             }
             _ => interpolate(scene, cache, p, second_order, &mut scratch, rays),
         };
-        cached.map(|c| direct + c)
+        match cached {
+            Some(c) => (direct + c, true),
+            // Not covered (a camera sample beyond the placed ones, or a tile read from
+            // another window's records): path traced, all parts, and counted.
+            None => (
+                sample_at(scene, p, lobe, None, Rgb::ONE, settings, s, rays).total() * sigma_s,
+                false,
+            ),
+        }
     })
 }
 
@@ -113,106 +120,6 @@ pub fn march_reference(
         for _ in 0..paths {
             sum += sample_at(scene, p, lobe, None, Rgb::ONE, &params.image.settings, &mut s, rays).total();
         }
-        Some(sum * sigma_s / paths as f64)
+        (sum * sigma_s / paths as f64, true)
     })
-}
-
-/// The camera-march image with L_o at the first surface from `surface(hit,
-/// direction, stream, rays)` and L_s(p) towards the camera from `l_s(p, phase
-/// lobe, σ_s, stream, rays)` (None: not covered, counted and taken as zero).
-fn march_image<G, F>(
-    scene: &Scene,
-    params: &CachedRenderParams,
-    progress: &Progress,
-    surface: G,
-    l_s: F,
-) -> Result<Reconstruction, Cancelled>
-where
-    G: FnMut(&Hit, DVec3, &mut Sampler, &mut u64) -> Rgb + Clone + Send + Sync,
-    F: FnMut(DVec3, &Lobe, Rgb, &mut Sampler, &mut u64) -> Option<Rgb> + Clone + Send + Sync,
-{
-    let start = Instant::now();
-    let ip = &params.image;
-    let cam = camera(scene, ip.width, ip.height);
-    let [x0, y0, x1, y1] = ip.window();
-    let (w, h) = (x1 - x0, y1 - y0);
-    let spp = ip.spp.max(1);
-    progress.start(h as u64);
-    type Pixel = (Rgb, Rgb, f64, f64); // Σ total, Σ medium part, Σ lum, Σ lum²
-    type Row = Result<(Vec<Pixel>, u64, u64), Cancelled>; // pixels, rays, uncovered points
-    let rows: Vec<Row> = (y0..y1)
-        .into_par_iter()
-        .map(|j| {
-            let (mut l_s, mut surface) = (l_s.clone(), surface.clone());
-            let (mut rays, mut uncovered) = (0u64, 0u64);
-            let mut row = Vec::with_capacity(w);
-            for i in x0..x1 {
-                progress.check()?;
-                let pixel = j * ip.width + i;
-                let mut acc: Pixel = (Rgb::ZERO, Rgb::ZERO, 0.0, 0.0);
-                for k in 0..spp {
-                    let (ray, mut s) = CameraRay::trace(scene, &cam, pixel, k, ip.seed);
-                    rays += 1;
-                    let end = ray.hit.map_or_else(|| scene.world_exit(ray.origin, ray.dir), |h| h.t);
-                    let t_end = scene
-                        .medium
-                        .as_ref()
-                        .map_or(Rgb::ONE, |m| m.transmittance(ray.origin, ray.dir, end));
-                    let surface = t_end
-                        * match &ray.hit {
-                            Some(hit) => surface(hit, ray.dir, &mut s, &mut rays),
-                            None => scene.escaped(ray.dir, None),
-                        };
-                    let mut medium = Rgb::ZERO;
-                    if let Some(m) = &scene.medium {
-                        let dt = ray.step(params.march_step);
-                        let lobe = Lobe::Phase {
-                            phase: m.phase,
-                            travel: ray.dir,
-                        };
-                        for (_, t, weight) in ray.march(params.march_step) {
-                            let p = ray.at(t);
-                            let v = l_s(p, &lobe, m.sigma_s, &mut s, &mut rays);
-                            uncovered += v.is_none() as u64;
-                            let seen = m.transmittance(ray.origin, ray.dir, t) * weight;
-                            medium += seen * v.unwrap_or(Rgb::ZERO) * dt;
-                        }
-                    }
-                    let total = surface + medium;
-                    let y = luminance(total);
-                    acc = (acc.0 + total, acc.1 + medium, acc.2 + y, acc.3 + y * y);
-                }
-                row.push(acc);
-            }
-            progress.advance(1);
-            Ok((row, rays, uncovered))
-        })
-        .collect();
-    let n = spp as f64;
-    let mut image = Rendered {
-        width: w,
-        height: h,
-        values: Vec::with_capacity(w * h),
-        medium: Vec::with_capacity(w * h),
-        std_error: Vec::with_capacity(w * h),
-        spp,
-        rays: 0,
-        seconds: 0.0,
-    };
-    let mut uncovered = 0;
-    for r in rows {
-        let (row, rays, unc) = r?;
-        image.rays += rays;
-        uncovered += unc;
-        for (total, medium, sy, sy2) in row {
-            image.values.push(total / n);
-            image.medium.push(medium / n);
-            let mean = sy / n;
-            image
-                .std_error
-                .push(((sy2 / n - mean * mean).max(0.0) / (n - 1.0).max(1.0)).sqrt());
-        }
-    }
-    image.seconds = start.elapsed().as_secs_f64();
-    Ok(Reconstruction { image, uncovered })
 }

@@ -49,7 +49,7 @@ impl ValidFor {
             width: ip.width,
             height: ip.height,
             window: ip.window(),
-            spp: ip.spp,
+            spp: params.placed_spp(),
             seed: ip.seed,
             march_step: params.march_step,
         }

@@ -60,7 +60,7 @@ impl SurfaceSource<D3> for CameraSurfaces<'_> {
     fn points(&self, k: usize, out: &mut Vec<SurfaceQuery<D3>>) {
         let pixel = self.order[k];
         let ip = &self.params.image;
-        for sample in 0..ip.spp {
+        for sample in 0..self.params.placed_spp() {
             let (ray, _) = CameraRay::trace(self.scene, &self.cam, pixel, sample, ip.seed);
             let Some(hit) = ray.hit else { continue };
             let sp = self.scene.surface(&hit, ray.dir);
