@@ -463,3 +463,31 @@ fn a_camera_move_keeps_the_records_with_moments() {
     step_until(&mut h, "the moved camera without moments", settled);
     assert_eq!(frame(&h).carried, 0);
 }
+
+/// "surface cache" in the 3D panel: the cached view's last level is the library's
+/// cached render with the surface cache at the scene-relative ε, bit for bit, and
+/// the copied command says `--surface-cache ours`.
+#[test]
+fn the_surface_cache_option_renders_the_librarys_image() {
+    let path = room_file("surface_cache");
+    let mut h = harness(app(&path));
+    {
+        let w = h.state_mut().volume_mut();
+        w.set_method(Method3d::Ours);
+        w.params.surface_cache = true;
+    }
+    h.step();
+    step_until(&mut h, "the cache with surfaces", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let f = w.frame().unwrap().clone();
+    assert_eq!(f.level, f.levels);
+    let scene = w.doc.scene();
+    let (cs, cp) = w.params.cached(scene, volcache::core::metric::CacheMethod::Ours, 1.0);
+    assert!(cp.surface_eps.is_some());
+    let direct =
+        volcache::volume::cached::render_cached(scene, &cp, &cs, None, &mut Default::default(), &Default::default())
+            .unwrap();
+    assert!(direct.surfaces.as_ref().unwrap().record_count() > 0);
+    assert_eq!(direct.reconstruction.image.values, f.image.values);
+    assert!(w.command().unwrap().contains("--surface-cache ours"));
+}

@@ -181,6 +181,12 @@ impl Workbench3d {
                 if keep != p.moment_bands.is_some() {
                     p.moment_bands = keep.then_some(DEFAULT_MOMENT_BANDS);
                 }
+                ui.checkbox(&mut p.surface_cache, "surface cache (indirect light on surfaces)")
+                    .on_hover_text(
+                        "The first surfaces' indirect irradiance from occlusion-aware second-order \
+                         records on the surfaces, direct light sampled per camera sample \
+                         (render3d --surface-cache ours); off: reflected light path traced.",
+                    );
             }
         }
     }

@@ -19,6 +19,7 @@ use crate::volume::cached::{
 };
 use crate::volume::render::{RenderParams, Rendered, render};
 use crate::volume::scene::Scene;
+use crate::volume::surface_cache::default_surface_eps;
 use std::sync::Arc;
 
 /// The band the view's "keep records when the camera moves" starts at: on
@@ -89,6 +90,9 @@ pub struct View3dParams {
     /// Caches: records also store their moments over ω_o to this band, and a
     /// camera move starts from the previous camera's records (`pipeline::moments`).
     pub moment_bands: Option<usize>,
+    /// Caches: the first surfaces' reflected light from a surface cache at the
+    /// scene-relative ε (`render3d --surface-cache ours`), not path traced.
+    pub surface_cache: bool,
 }
 
 impl View3dParams {
@@ -107,6 +111,7 @@ impl View3dParams {
             eps: None,
             seed: scene.desc.render.seed,
             moment_bands: None,
+            surface_cache: false,
         }
     }
 
@@ -136,8 +141,9 @@ impl View3dParams {
     /// The cache settings and image of a cached level.
     pub fn cached(&self, scene: &Scene, method: CacheMethod, scale: f64) -> (CacheSettings, CachedRenderParams) {
         let image = self.image(scene, scale, self.cache_spp.max(1));
-        let (mut cs, cp) = cache_settings(scene, image, method, self.eps, self.rays, self.steps);
+        let (mut cs, mut cp) = cache_settings(scene, image, method, self.eps, self.rays, self.steps);
         cs.moment_bands = self.moment_bands;
+        cp.surface_eps = self.surface_cache.then(|| default_surface_eps(scene));
         (cs, cp)
     }
 }

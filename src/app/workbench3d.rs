@@ -341,6 +341,9 @@ impl Workbench3d {
                 " --eps {:e} --rays {} --steps {}",
                 f.eps, self.params.rays, self.params.steps
             );
+            if self.params.surface_cache {
+                c += " --surface-cache ours";
+            }
         }
         if f.carried > 0 {
             c += &format!(

@@ -14,7 +14,6 @@ use super::cached_params::CachedRenderParams;
 use super::camera_march::CameraRay;
 use super::lights::Lobe;
 use super::mesh::Hit;
-use super::reconstruct::Reconstruction;
 use super::render::{Rendered, camera};
 use super::scene::Scene;
 use crate::core::color::{Rgb, luminance};
@@ -24,6 +23,15 @@ use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::time::Instant;
+
+/// A reconstructed image and its cost.
+#[derive(Clone, Debug)]
+pub struct Reconstruction {
+    pub image: Rendered,
+    /// Query points no visible record covered (zero after a placement of the same
+    /// window; a tile rendered with another window's records may have some).
+    pub uncovered: u64,
+}
 
 /// Σ total, Σ medium part, Σ luminance, Σ luminance² of a pixel's samples.
 type Pixel = (Rgb, Rgb, f64, f64);

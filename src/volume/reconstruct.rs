@@ -9,9 +9,9 @@
 
 use super::cached_params::{CacheView, CachedRenderParams};
 use super::lights::Lobe;
+pub use super::march_image::Reconstruction;
 use super::march_image::march_image;
 use super::mesh::Hit;
-use super::render::Rendered;
 use super::scene::Scene;
 use super::surface_cache::surface_radiance;
 use crate::core::color::Rgb;
@@ -23,15 +23,6 @@ use crate::pipeline::placement::{interpolate, interpolate_moments};
 use crate::pipeline::world::World;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
-
-/// A reconstructed image and its cost.
-#[derive(Clone, Debug)]
-pub struct Reconstruction {
-    pub image: Rendered,
-    /// Query points no visible record covered (zero after a placement of the same
-    /// window; a tile rendered with another window's records may have some).
-    pub uncovered: u64,
-}
 
 /// Render the window from the cache: per camera sample, T L_o at the first surface
 /// (path traced) plus Σ_n T(t_n) Δ [σ_s·direct + cached L_s] over its march points.
