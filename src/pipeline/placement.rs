@@ -314,7 +314,21 @@ fn interpolate_by<W: World>(
     rays: &mut u64,
     payload: impl Fn(usize) -> TaylorRgb<W::S>,
 ) -> Option<Rgb> {
-    cache.covering_where(y, scratch, |_, x| sees(world, x, y, rays));
+    let keep = |_: usize, x| sees(world, x, y, rays);
+    interpolate_kept(cache, y, second_order, scratch, keep, payload)
+}
+
+/// Σ w_i v_i(y) / Σ w_i over the records covering `y` that pass `keep(index,
+/// position)`, each extrapolated without going negative; None when none is kept.
+pub(super) fn interpolate_kept<S: Dim>(
+    cache: &RadianceCache<S>,
+    y: S::Vec,
+    second_order: bool,
+    scratch: &mut Vec<(usize, f64)>,
+    keep: impl FnMut(usize, S::Vec) -> bool,
+    payload: impl Fn(usize) -> TaylorRgb<S>,
+) -> Option<Rgb> {
+    cache.covering_where(y, scratch, keep);
     let total: f64 = scratch.iter().map(|&(_, w)| w).sum();
     if total <= 0.0 {
         return None;

@@ -12,7 +12,7 @@
 //! sees the other from just above its surface.
 
 use super::dim::Dim;
-use super::placement::{RadianceCache, walk};
+use super::placement::{RadianceCache, interpolate_kept, walk};
 use super::probe::SurfaceReceiver;
 use super::record::CacheSettings;
 use super::surface_record::{SurfaceRecordData, compute_surface_record};
@@ -161,7 +161,8 @@ pub fn place_surfaces<W: World, Q: SurfaceSource<W::S>>(
 }
 
 /// The indirect irradiance at the surface point `y` (normal `n`) from the records
-/// that serve it, clamped at zero; None when none does.
+/// that serve it, each extrapolated without going negative (as the medium cache's);
+/// None when none does.
 pub fn interpolate_surface<W: World>(
     world: &W,
     sc: &SurfaceCache<W::S>,
@@ -171,7 +172,7 @@ pub fn interpolate_surface<W: World>(
     rays: &mut u64,
 ) -> Option<Rgb> {
     let keep = serving(world, (&sc.cache, &sc.normals), (y, n), rays);
-    sc.cache
-        .interpolate_where(y, second_order, scratch, keep)
-        .map(|v| v.max(Rgb::ZERO))
+    interpolate_kept(&sc.cache, y, second_order, scratch, keep, |i| {
+        sc.cache.records()[i].value
+    })
 }

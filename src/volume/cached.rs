@@ -19,11 +19,10 @@ pub use super::cached_params::{
     CacheView, CachedRenderParams, Placement, RadianceCache, RecordInfo, RecordMemo, SurfaceCache, SurfaceMemo,
 };
 use super::camera::Camera;
-use super::camera_march::CameraRay;
+use super::camera_march::{CameraRay, window_order};
 pub use super::reconstruct::{Reconstruction, march_reference, reconstruct};
 use super::render::camera;
 use super::scene::Scene;
-use crate::core::cache::placement_order;
 use crate::core::metric::CacheMethod;
 use crate::core::rng::mix64;
 use crate::core::space::D3;
@@ -61,19 +60,13 @@ struct CameraSamples<'a> {
 
 impl<'a> CameraSamples<'a> {
     fn new(scene: &'a Scene, params: &'a CachedRenderParams) -> Self {
-        let p = &params.image;
-        let [x0, y0, x1, y1] = p.window();
-        let (w, h) = (x1 - x0, y1 - y0);
-        let order = placement_order(w, h)
-            .into_iter()
-            .map(|k| (y0 + k / w) * p.width + x0 + k % w)
-            .collect();
+        let (order, size_key) = window_order(&params.image);
         CameraSamples {
             scene,
-            cam: camera(scene, p.width, p.height),
+            cam: camera(scene, params.image.width, params.image.height),
             params,
             order,
-            size_key: (((p.width & 0xFFFF) << 16) | (p.height & 0xFFFF)) as u128,
+            size_key,
         }
     }
 }

@@ -128,6 +128,22 @@ impl CameraRay {
     }
 }
 
+/// The window's full-image pixel indices in placement order (coarse to fine), and
+/// the image's width and height (16 bits each) as the top of a memo's keys: the
+/// walk of every query source of a cached render.
+pub fn window_order(params: &super::render::RenderParams) -> (Vec<usize>, u128) {
+    let [x0, y0, x1, y1] = params.window();
+    let w = x1 - x0;
+    let order = crate::core::cache::placement_order(w, y1 - y0)
+        .into_iter()
+        .map(|k| (y0 + k / w) * params.width + x0 + k % w)
+        .collect();
+    (
+        order,
+        (((params.width & 0xFFFF) << 16) | (params.height & 0xFFFF)) as u128,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

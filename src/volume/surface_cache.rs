@@ -6,11 +6,10 @@
 
 use super::cached_params::{CachedRenderParams, SurfaceCache, SurfaceMemo};
 use super::camera::Camera;
-use super::camera_march::CameraRay;
+use super::camera_march::{CameraRay, window_order};
 use super::mesh::Hit;
 use super::render::camera;
 use super::scene::Scene;
-use crate::core::cache::placement_order;
 use crate::core::color::Rgb;
 use crate::core::rng::{Sampler, mix64};
 use crate::core::space::D3;
@@ -36,18 +35,13 @@ struct CameraSurfaces<'a> {
 
 impl<'a> CameraSurfaces<'a> {
     fn new(scene: &'a Scene, params: &'a CachedRenderParams) -> Self {
-        let p = &params.image;
-        let [x0, y0, x1, y1] = p.window();
-        let w = x1 - x0;
+        let (order, size_key) = window_order(&params.image);
         CameraSurfaces {
             scene,
-            cam: camera(scene, p.width, p.height),
+            cam: camera(scene, params.image.width, params.image.height),
             params,
-            order: placement_order(w, y1 - y0)
-                .into_iter()
-                .map(|k| (y0 + k / w) * p.width + x0 + k % w)
-                .collect(),
-            size_key: (((p.width & 0xFFFF) << 16) | (p.height & 0xFFFF)) as u128,
+            order,
+            size_key,
         }
     }
 }
