@@ -333,7 +333,7 @@ pub fn capture<W: World>(
     let n = ps.rays.max(W::S::DIM + 1);
     let dirs = W::S::directions(n, ps.jitter, mix64(seed ^ mix64(item.wrapping_add(0x9e37))));
     let simplices = W::S::neighbours(&dirs);
-    let mut lf = trace_field(world, x, (dirs, simplices), None, true, ps, seed, item, progress)?;
+    let mut lf = trace_field(world, x, (dirs, simplices), None, ps, seed, item, progress)?;
     (lf.omega_o, lf.eye) = (omega_o, eye);
     Ok(lf)
 }
@@ -360,14 +360,12 @@ pub fn capture_surface<W: World>(
     // Rays skip the receiver's primitive, and leave from a hair above it: a
     // neighbour in its plane (or the silhouette test's rays, which skip the hit's
     // primitive instead) must not meet it at a rounding-level distance.
-    let skip = Some(receiver.prim);
     let above = x + normal * (1e-9 * world.scale());
     let mut lf = trace_field(
         world,
         above,
         (dirs, simplices),
-        skip,
-        receiver.emitted,
+        Some(receiver),
         ps,
         seed,
         item,
@@ -383,22 +381,26 @@ pub fn capture_surface<W: World>(
 /// A light field's directions and their neighbours.
 type Directions<S> = (Vec<<S as Space>::Vec>, Vec<<S as Dim>::Simplex<u32>>);
 
-/// The rays of a light field at `x` along `dirs` (with their neighbours), each
-/// skipping `skip`; `emitted`: whether hits keep their emission, escaped rays the
-/// sky, and x its delta lights. The field's ω_o is left to the caller.
+/// The rays of a light field at `x` along `dirs` (with their neighbours), at a
+/// medium point (`surface` None) or a surface receiver: its rays skip its
+/// primitive; without `emitted` hits lose their emission, escaped rays the sky and
+/// x its delta lights; and hits carry T_true / exp(−σ_t(x)·t), as escaped rays do,
+/// since a surface may lie outside a bounded medium and look into it (a medium
+/// point's hits do not: see the module docs). The field's ω_o is left to the caller.
 #[allow(clippy::too_many_arguments)] // the capture's inputs are spelled out
 fn trace_field<W: World>(
     world: &W,
     x: <W::S as Space>::Vec,
     (dirs, simplices): Directions<W::S>,
-    skip: Option<u32>,
-    emitted: bool,
+    surface: Option<SurfaceReceiver<<W::S as Space>::Vec>>,
     ps: &ProbeSettings,
     seed: u64,
     item: u64,
     progress: &Progress,
 ) -> Result<LightField<W::S>, Cancelled> {
     let start = std::time::Instant::now();
+    let skip = surface.map(|r| r.prim);
+    let emitted = surface.is_none_or(|r| r.emitted);
     let medium = world.medium();
     let at_x = world.medium_at(x);
     let sigma_t_x = at_x.map_or(Rgb::ZERO, |m| m.sigma_t);
@@ -438,6 +440,9 @@ fn trace_field<W: World>(
                 let (sp, mut radiance) = radiance_leaving(world, &h, dir, paths, &ps.settings, &mut s, &mut rays);
                 if !emitted && sp.active {
                     radiance -= sp.emission;
+                }
+                if surface.is_some() {
+                    radiance *= model_correction(world, x, dir, h.t, sigma_t_x);
                 }
                 SurfaceHit {
                     point: sp.point,
@@ -593,4 +598,18 @@ fn escaped_radiance<W: World>(
     let t_true = world.transmittance(x, dir, world.world_exit(x, dir));
     let t_model = (-sigma_t_x * length).exp();
     sky * Rgb::select(t_model.cmpgt(Rgb::splat(1e-200)), t_true / t_model, Rgb::ZERO)
+}
+
+/// T_true(x → x + t·dir) / exp(−σ_t(x)·t): what makes the proxy's homogeneous
+/// transmittance give the true one (zero where that is not representable).
+fn model_correction<W: World>(
+    world: &W,
+    x: <W::S as Space>::Vec,
+    dir: <W::S as Space>::Vec,
+    t: f64,
+    sigma_t_x: Rgb,
+) -> Rgb {
+    let t_model = (-sigma_t_x * t).exp();
+    let t_true = world.transmittance(x, dir, t);
+    Rgb::select(t_model.cmpgt(Rgb::splat(1e-200)), t_true / t_model, Rgb::ZERO)
 }
