@@ -145,6 +145,23 @@ fn bad_input_is_a_clear_error() {
     );
     fails_with(&["render3d", s, "--method", "ours", "--rays", "2"], "--rays");
     fails_with(
+        &[
+            "render3d",
+            s,
+            "--method",
+            "ours",
+            "--surface-cache",
+            "ours",
+            "--records-out",
+            "/tmp/never.json",
+        ],
+        "--surface-cache",
+    );
+    fails_with(
+        &["render3d", s, "--method", "ours", "--surface-eps", "0.1"],
+        "--surface-eps",
+    );
+    fails_with(
         &["render3d", s, "--method", "ours", "--march-step", "0"],
         "--march-step",
     );

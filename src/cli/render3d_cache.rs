@@ -161,6 +161,11 @@ pub fn run_cached(
     progress: &Progress,
 ) -> anyhow::Result<(Option<Rendered>, CacheSummary)> {
     let (cs, mut cp) = a.settings(scene, image, method)?;
+    anyhow::ensure!(
+        cp.surface_eps.is_none() || (records.records_in.is_none() && records.records_out.is_none()),
+        "--surface-cache ours cannot be shared through --records-in/--records-out yet: records files hold \
+         the medium's records only, and tiles would each place their own surface records"
+    );
     if let Some(p) = place_spp {
         check_spp("--spp", p, volcache::limits::MAX_SPP)?;
         cp.place_spp = Some(p);
