@@ -156,7 +156,9 @@ pub fn build<S: Dim>(n: usize, bounds: impl Fn(usize) -> Aabb<S> + Sync) -> Bina
         .with_min_len(CHUNK)
         .map(|i| Ref::new(Box4::outward(&bounds(i)), i as u32))
         .collect();
-    let mut nodes = Vec::with_capacity(2 * n / MAX_LEAF + 1);
+    // Binary trees of the benchmark sphere have 0.6 nodes per primitive (2·n/MAX_LEAF
+    // was too few: the vector grew and was copied).
+    let mut nodes = Vec::with_capacity(n);
     if !refs.is_empty() {
         let (root, centres) = chunked(
             &refs,
@@ -168,7 +170,13 @@ pub fn build<S: Dim>(n: usize, bounds: impl Fn(usize) -> Aabb<S> + Sync) -> Bina
             },
             |a, c| (a.0.union(&c.0), a.1.union(&c.1)),
         );
-        subtree::<S>(&mut refs, 0, root, centres).flatten(&mut nodes);
+        if rayon::current_num_threads() == 1 {
+            // The tasks' nodes flattened are those of a sequential build: on one
+            // thread, build straight into `nodes` (no copies, no vectors per task).
+            split_range::<S>(&mut nodes, &mut refs, 0, root, centres);
+        } else {
+            subtree::<S>(&mut refs, 0, root, centres).flatten(&mut nodes);
+        }
     }
     let order = refs.par_iter().with_min_len(CHUNK).map(Ref::index).collect();
     BinaryTree { nodes, order }
@@ -329,7 +337,7 @@ impl Built {
 /// build their children with `rayon::join`, the rest sequentially.
 fn subtree<S: Dim>(refs: &mut [Ref], offset: usize, bounds: Box4, centres: Box4) -> Built {
     if refs.len() < TASK {
-        let mut nodes = Vec::with_capacity(2 * refs.len() / MAX_LEAF + 1);
+        let mut nodes = Vec::with_capacity(refs.len());
         split_range::<S>(&mut nodes, refs, offset, bounds, centres);
         return Built::Nodes(nodes);
     }
