@@ -276,12 +276,6 @@ impl Grid {
         std::array::from_fn(|a| Self::clamp(x[a]))
     }
 
-    /// The bin of centre `c` on axis `a`.
-    #[inline]
-    fn bin(&self, a: usize, c: &[f32; 4]) -> usize {
-        Self::clamp((c[a] - self.lo[a]) * self.scale[a])
-    }
-
     /// Bin ⌊x⌋ clamped to the bins: clamped as a float, then converted (the same bin
     /// as converting then clamping, for the x ≥ 0 met here), which spares the checks
     /// of a saturating conversion (a third of the binning's instructions).
@@ -438,12 +432,16 @@ fn split<S: Dim>(refs: &mut [Ref], bounds: Box4, centres: Box4) -> Option<Split>
         return None; // a leaf is cheaper
     }
     // The partition also gathers each side's centres, which the children's bins
-    // need: no separate pass over the primitives for them.
+    // need: no separate pass over the primitives for them. Bin ≤ k is tested as
+    // x < k + 1 on the unclamped x (the same answer, NaN included, as k < BINS − 1),
+    // without the conversion.
     let mut sides = [Box4::EMPTY; 2];
     let mut mid = 0;
+    let past_k = (k + 1) as f32;
     for j in 0..n {
         let c = refs[j].centre2();
-        if grid.bin(axis, &c) <= k {
+        let right = (c[axis] - grid.lo[axis]) * grid.scale[axis] >= past_k;
+        if !right {
             sides[0].grow(&c);
             refs.swap(j, mid);
             mid += 1;
