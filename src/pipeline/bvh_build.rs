@@ -54,19 +54,26 @@ pub struct Box4 {
     pub hi: [f32; 4],
 }
 
-/// The largest f32 ≤ x. Without a branch on which way the conversion rounded: that
-/// way is as good as random, and the mispredicted branches took most of the time
-/// of making the primitives' boxes.
+/// The smallest f32 ≥ x. Branching on the rounding direction suits the traversal,
+/// where x is mostly ∞ (nothing hit yet): the branch predicts well there.
+pub fn round_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
+}
+
+/// The largest f32 ≤ x, for the primitives' boxes: selected rather than branched
+/// on which way the conversion rounded, which is as good as random there (the
+/// mispredicted branches took most of the time of making the boxes).
 #[inline]
-pub fn round_down(x: f64) -> f32 {
+fn down(x: f64) -> f32 {
     let f = x as f32;
     let d = f.next_down();
     if f as f64 > x { d } else { f }
 }
 
-/// The smallest f32 ≥ x (without a branch, as [`round_down`]).
+/// The smallest f32 ≥ x, for the primitives' boxes (as [`down`]).
 #[inline]
-pub fn round_up(x: f64) -> f32 {
+fn up(x: f64) -> f32 {
     let f = x as f32;
     let u = f.next_up();
     if (f as f64) < x { u } else { f }
@@ -85,7 +92,7 @@ impl Box4 {
             hi: [0.0; 4],
         };
         for a in 0..S::DIM {
-            (r.lo[a], r.hi[a]) = (round_down(b.min[a]), round_up(b.max[a]));
+            (r.lo[a], r.hi[a]) = (down(b.min[a]), up(b.max[a]));
         }
         r
     }
