@@ -159,22 +159,28 @@ impl WideBvh {
         let BinNode::Inner { left, right } = tree.nodes[b as usize].1 else {
             unreachable!("only inner nodes are opened");
         };
-        let mut children: SmallVec<[u32; WIDTH]> = SmallVec::from_slice(&[left, right]);
+        // Children with their areas (−1 for leaves, never opened), each computed once.
+        let with_area = |c: u32| match tree.nodes[c as usize] {
+            (b, BinNode::Inner { .. }) => (c, b.half_boundary::<S>()),
+            (_, BinNode::Leaf { .. }) => (c, -1.0),
+        };
+        let mut children: SmallVec<[(u32, f64); WIDTH]> = SmallVec::from_slice(&[with_area(left), with_area(right)]);
         while children.len() < WIDTH {
-            let area = |c: &u32| tree.nodes[*c as usize].0.half_boundary::<S>();
-            let widest = children
+            let (k, &(widest, area)) = children
                 .iter()
                 .enumerate()
-                .filter(|(_, c)| matches!(tree.nodes[**c as usize].1, BinNode::Inner { .. }))
-                .max_by(|x, y| area(x.1).total_cmp(&area(y.1)))
-                .map(|(k, _)| k);
-            let Some(k) = widest else { break };
-            let BinNode::Inner { left, right } = tree.nodes[children[k] as usize].1 else {
-                unreachable!("filtered to inner nodes");
+                .max_by(|x, y| x.1.1.total_cmp(&y.1.1))
+                .expect("two children or more");
+            if area < 0.0 {
+                break; // only leaves
+            }
+            let BinNode::Inner { left, right } = tree.nodes[widest as usize].1 else {
+                unreachable!("leaves have area −1");
             };
-            children[k] = left;
-            children.insert(k + 1, right);
+            children[k] = with_area(left);
+            children.insert(k + 1, with_area(right));
         }
+        let children: SmallVec<[u32; WIDTH]> = children.iter().map(|c| c.0).collect();
         let index = self.nodes.len() as u32;
         self.nodes.push(Self::node(tree, &children));
         for (k, &c) in children.iter().enumerate() {
