@@ -28,8 +28,9 @@ use std::time::Instant;
 #[derive(Clone, Debug)]
 pub struct Reconstruction {
     pub image: Rendered,
-    /// Query points no visible record covered (zero after a placement of the same
-    /// window; a tile rendered with another window's records may have some).
+    /// March points no visible record covered, path traced instead (zero after a
+    /// placement of the same window and samples; camera samples beyond the placed
+    /// ones, or a tile rendered with another window's records, may have some).
     pub uncovered: u64,
 }
 
