@@ -35,23 +35,26 @@ pub fn circle(n: usize, jitter: f64, seed: u64) -> Vec<DVec2> {
 
 /// N stratified unit directions (spherical Fibonacci, jittered by `jitter` ∈ [0, 1]).
 pub fn fibonacci(n: usize, jitter: f64, seed: u64) -> Vec<DVec3> {
+    (0..n).map(|k| fibonacci_point(k, n, jitter, seed)).collect()
+}
+
+/// Point k of an N-point spherical Fibonacci set (see the module docs): z in
+/// equal-area bands from the north pole, φ by the golden ratio, each jittered in
+/// its stratum from the stream (seed, k).
+fn fibonacci_point(k: usize, n: usize, jitter: f64, seed: u64) -> DVec3 {
     let golden = (1.0 + 5f64.sqrt()) * 0.5;
     let nf = n as f64;
     let dphi = TAU / nf.sqrt();
-    (0..n)
-        .map(|k| {
-            let mut s = Sampler::new2(seed, 0x5f3e_7e2e, k as u64);
-            let (u, v) = if jitter > 0.0 {
-                (s.next_f64() - 0.5, s.next_f64() - 0.5)
-            } else {
-                (0.0, 0.0)
-            };
-            let z = (1.0 - 2.0 * (k as f64 + 0.5 + jitter * u) / nf).clamp(-1.0, 1.0);
-            let phi = TAU * (k as f64 / golden).fract() + jitter * v * dphi;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            DVec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-        .collect()
+    let mut s = Sampler::new2(seed, 0x5f3e_7e2e, k as u64);
+    let (u, v) = if jitter > 0.0 {
+        (s.next_f64() - 0.5, s.next_f64() - 0.5)
+    } else {
+        (0.0, 0.0)
+    };
+    let z = (1.0 - 2.0 * (k as f64 + 0.5 + jitter * u) / nf).clamp(-1.0, 1.0);
+    let phi = TAU * (k as f64 / golden).fract() + jitter * v * dphi;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    DVec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -132,22 +135,11 @@ pub fn half_circle(n: usize, normal: DVec2, jitter: f64, seed: u64) -> Vec<DVec2
 /// jittered alike), in the right-handed frame (t, b, n) of glam's
 /// `any_orthonormal_pair` (so the triangulation's orientation carries over).
 pub fn hemisphere(n: usize, normal: DVec3, jitter: f64, seed: u64) -> Vec<DVec3> {
-    let golden = (1.0 + 5f64.sqrt()) * 0.5;
-    let nf = n as f64;
-    let dphi = TAU / (2.0 * nf).sqrt();
     let (t, b) = normal.any_orthonormal_pair();
     (0..n)
         .map(|k| {
-            let mut s = Sampler::new2(seed, 0x5f3e_7e2e, k as u64);
-            let (u, v) = if jitter > 0.0 {
-                (s.next_f64() - 0.5, s.next_f64() - 0.5)
-            } else {
-                (0.0, 0.0)
-            };
-            let z = (1.0 - (k as f64 + 0.5 + jitter * u) / nf).clamp(0.0, 1.0);
-            let phi = TAU * (k as f64 / golden).fract() + jitter * v * dphi;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            t * (r * phi.cos()) + b * (r * phi.sin()) + normal * z
+            let p = fibonacci_point(k, 2 * n, jitter, seed);
+            t * p.x + b * p.y + normal * p.z
         })
         .collect()
 }

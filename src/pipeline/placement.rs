@@ -149,15 +149,9 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             if missing.is_empty() {
                 return Ok(());
             }
-            let d = match memo.entry(p.key) {
-                Entry::Occupied(e) => e.into_mut(),
-                Entry::Vacant(e) => {
-                    let t = Instant::now();
-                    let d = compute_record(world, p.y, source.outgoing(p.y), cs, p.id, progress)?;
-                    capture_wall += t.elapsed().as_secs_f64();
-                    e.insert(d)
-                }
-            };
+            let d = memoised(memo, p.key, &mut capture_wall, || {
+                compute_record(world, p.y, source.outgoing(p.y), cs, p.id, progress)
+            })?;
             *rays += d.rays;
             records_seconds += d.seconds;
             for c in missing {
@@ -187,6 +181,26 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
         query_points,
         rays,
         seconds: start.elapsed().as_secs_f64() - capture_wall + records_seconds,
+    })
+}
+
+/// The memo's light field of `key`, computed (and its wall time added to
+/// `capture_wall`) when the memo does not have it: a placement is charged its
+/// records' own seconds, memoised or not, not the capture's wall time.
+pub(super) fn memoised<'m, D>(
+    memo: &'m mut HashMap<u128, D>,
+    key: u128,
+    capture_wall: &mut f64,
+    compute: impl FnOnce() -> Result<D, Cancelled>,
+) -> Result<&'m mut D, Cancelled> {
+    Ok(match memo.entry(key) {
+        Entry::Occupied(e) => e.into_mut(),
+        Entry::Vacant(e) => {
+            let t = Instant::now();
+            let d = compute()?;
+            *capture_wall += t.elapsed().as_secs_f64();
+            e.insert(d)
+        }
     })
 }
 

@@ -330,8 +330,7 @@ pub fn capture<W: World>(
         Outgoing::Direction(w) => (w, None),
         Outgoing::TowardsPoint(e) => (unit(e - x), Some(e)),
     };
-    let n = ps.rays.max(W::S::DIM + 1);
-    let dirs = W::S::directions(n, ps.jitter, mix64(seed ^ mix64(item.wrapping_add(0x9e37))));
+    let dirs = W::S::directions(ray_count::<W::S>(ps), ps.jitter, directions_seed(seed, item));
     let simplices = W::S::neighbours(&dirs);
     let mut lf = trace_field(world, x, (dirs, simplices), None, ps, seed, item, progress)?;
     (lf.omega_o, lf.eye) = (omega_o, eye);
@@ -354,8 +353,7 @@ pub fn capture_surface<W: World>(
     progress: &Progress,
 ) -> Result<LightField<W::S>, Cancelled> {
     let normal = receiver.normal;
-    let n = ps.rays.max(W::S::DIM + 1);
-    let dirs = W::S::hemisphere(n, normal, ps.jitter, mix64(seed ^ mix64(item.wrapping_add(0x9e37))));
+    let dirs = W::S::hemisphere(ray_count::<W::S>(ps), normal, ps.jitter, directions_seed(seed, item));
     let simplices = W::S::hemisphere_neighbours(&dirs, normal);
     // Rays skip the receiver's primitive, and leave from a hair above it: a
     // neighbour in its plane (or the silhouette test's rays, which skip the hit's
@@ -376,6 +374,16 @@ pub fn capture_surface<W: World>(
     lf.g = 0.0;
     lf.angular = Angular::Cosine(normal);
     Ok(lf)
+}
+
+/// Directions of a light field: at least a simplex's worth.
+fn ray_count<S: Dim>(ps: &ProbeSettings) -> usize {
+    ps.rays.max(S::DIM + 1)
+}
+
+/// The stream of a light field's direction jitter, for (seed, item).
+fn directions_seed(seed: u64, item: u64) -> u64 {
+    mix64(seed ^ mix64(item.wrapping_add(0x9e37)))
 }
 
 /// A light field's directions and their neighbours.

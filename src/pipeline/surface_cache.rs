@@ -12,7 +12,7 @@
 //! sees the other from just above its surface.
 
 use super::dim::Dim;
-use super::placement::{RadianceCache, interpolate_kept, walk};
+use super::placement::{RadianceCache, interpolate_kept, memoised, walk};
 use super::probe::SurfaceReceiver;
 use super::record::CacheSettings;
 use super::surface_record::{SurfaceRecordData, compute_surface_record};
@@ -22,7 +22,6 @@ use crate::core::color::Rgb;
 use crate::core::space::Space;
 use crate::progress::{Cancelled, Progress};
 use std::collections::HashMap;
-use std::collections::hash_map::Entry;
 use std::time::Instant;
 
 /// The least cosine between a record's normal and a point's for the record to
@@ -118,20 +117,14 @@ pub fn place_surfaces<W: World, Q: SurfaceSource<W::S>>(
             if covered(st, &p, rays) {
                 return Ok(());
             }
-            let d = match memo.entry(p.key) {
-                Entry::Occupied(e) => e.into_mut(),
-                Entry::Vacant(e) => {
-                    let t = Instant::now();
-                    let receiver = SurfaceReceiver {
-                        normal: p.normal,
-                        prim: p.prim,
-                        emitted: false,
-                    };
-                    let d = compute_surface_record(world, p.y, receiver, cs, p.id, progress)?;
-                    capture_wall += t.elapsed().as_secs_f64();
-                    e.insert(d)
-                }
+            let receiver = SurfaceReceiver {
+                normal: p.normal,
+                prim: p.prim,
+                emitted: false,
             };
+            let d = memoised(memo, p.key, &mut capture_wall, || {
+                compute_surface_record(world, p.y, receiver, cs, p.id, progress)
+            })?;
             *rays += d.rays;
             records_seconds += d.seconds;
             let value = d.irradiance();
