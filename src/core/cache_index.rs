@@ -64,8 +64,8 @@ pub(crate) enum IndexError {
 /// Hierarchical hash grid of record ids (see the module docs).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct GridIndex {
-    /// Occupied levels, ascending.
-    levels: Vec<i32>,
+    /// Occupied levels, ascending, each with its cells' inverse side 2^-ℓ.
+    levels: Vec<(i32, f64)>,
     cells: HashMap<CellKey, Vec<u32>, BuildHasherDefault<KeyHasher>>,
 }
 
@@ -91,7 +91,8 @@ impl GridIndex {
         if level > LEVEL_LIMIT {
             return Err(IndexError::TooLarge);
         }
-        let (a, b) = (cell_of(lo, level, dim), cell_of(hi, level, dim));
+        let inv = 2f64.powi(-level);
+        let (a, b) = (cell_of(lo, inv, dim), cell_of(hi, inv, dim));
         let mut cell = a;
         // Odometer over the (≤ 2 or 3 per axis) cells between a and b.
         loop {
@@ -109,8 +110,8 @@ impl GridIndex {
                 break;
             }
         }
-        if let Err(pos) = self.levels.binary_search(&level) {
-            self.levels.insert(pos, level);
+        if let Err(pos) = self.levels.binary_search_by_key(&level, |&(l, _)| l) {
+            self.levels.insert(pos, (level, inv));
         }
         Ok(())
     }
@@ -121,10 +122,10 @@ impl GridIndex {
         if !y[..dim].iter().all(|v| v.is_finite()) {
             return;
         }
-        for &level in &self.levels {
+        for &(level, inv) in &self.levels {
             let key = CellKey {
                 level,
-                cell: cell_of(y, level, dim),
+                cell: cell_of(y, inv, dim),
             };
             if let Some(ids) = self.cells.get(&key) {
                 ids.iter().for_each(|&id| f(id));
@@ -138,13 +139,13 @@ impl GridIndex {
     }
 }
 
-/// Integer cell of point p at `level`: floor(p · 2^-ℓ), exact scaling by a power of
-/// two, saturating at the i64 range (monotone, so boxes still contain their points).
-fn cell_of(p: [f64; 3], level: i32, dim: usize) -> [i64; 3] {
-    let s = 2f64.powi(-level);
+/// Integer cell of point p at the level of inverse side `inv` = 2^-ℓ: floor(p · inv),
+/// exact scaling by a power of two, saturating at the i64 range (monotone, so boxes
+/// still contain their points).
+fn cell_of(p: [f64; 3], inv: f64, dim: usize) -> [i64; 3] {
     let mut c = [0i64; 3];
     for i in 0..dim {
-        c[i] = (p[i] * s).floor() as i64;
+        c[i] = (p[i] * inv).floor() as i64;
     }
     c
 }

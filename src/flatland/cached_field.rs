@@ -21,6 +21,7 @@ use crate::pipeline::placement::{
 };
 use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::Cached;
+use crate::pipeline::sight::{Near, near_table};
 use crate::pipeline::world::World;
 use crate::progress::Progress;
 use glam::DVec2;
@@ -133,6 +134,7 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
     let per_part = p.caches.len() == 2;
     // Per pixel (value, inside the medium, covered by a record), and rays per row.
     type Row = (Vec<(Rgb, bool, bool)>, u64);
+    let near: Vec<Vec<Near>> = p.caches.iter().map(|c| near_table(scene, c)).collect();
     let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|j| {
@@ -157,7 +159,8 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                     let cached: Vec<Option<Rgb>> = p
                         .caches
                         .iter()
-                        .map(|c| interpolate(scene, c, x, second_order, &mut scratch, &mut rays))
+                        .zip(&near)
+                        .map(|(c, n)| interpolate(scene, (c, n), x, second_order, &mut scratch, &mut rays))
                         .collect();
                     let covered = cached.iter().all(Option::is_some);
                     let cached: Vec<Rgb> = cached.into_iter().map(|c| c.unwrap_or(Rgb::ZERO)).collect();

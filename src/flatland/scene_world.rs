@@ -30,6 +30,16 @@ impl World for Scene {
         self.geometry.occluded(o, d, self.t_min, t_max * (1.0 - 1e-10), skip)
     }
 
+    fn occluders_in_box(&self, lo: DVec2, hi: DVec2, limit: usize, out: &mut Vec<u32>) -> bool {
+        self.geometry.prims_in_box(lo, hi, limit, out)
+    }
+
+    fn occluded_among(&self, ids: &[u32], o: DVec2, d: DVec2, t_max: f64) -> bool {
+        // The bounds of `occluded`, so that the answers agree.
+        self.geometry
+            .occluded_among(ids, o, d, self.t_min, t_max * (1.0 - 1e-10))
+    }
+
     fn centre(&self) -> DVec2 {
         0.5 * (self.domain_min + self.domain_max)
     }

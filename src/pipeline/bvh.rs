@@ -182,6 +182,61 @@ impl<S: Dim, P: Primitive<S>> Geometry<S, P> {
     }
 }
 
+impl<S: Dim, P: Primitive<S>> Geometry<S, P> {
+    /// The primitives whose bounding boxes overlap the box [`lo`, `hi`], into
+    /// `out` (cleared first) in increasing index; false, with `out` incomplete,
+    /// once there are more than `limit`. Every primitive that meets the box is
+    /// listed (a superset: their boxes, not the primitives, are tested).
+    pub fn prims_in_box(&self, lo: S::Vec, hi: S::Vec, limit: usize, out: &mut Vec<u32>) -> bool {
+        out.clear();
+        let overlaps = |p: &P| {
+            let (a, b) = p.bounds();
+            (0..S::DIM).all(|k| a[k] <= hi[k] && b[k] >= lo[k])
+        };
+        let complete = match self.accel {
+            Accel::Linear => {
+                for (i, p) in self.prims.iter().enumerate() {
+                    if overlaps(p) {
+                        out.push(i as u32);
+                        if out.len() > limit {
+                            return false;
+                        }
+                    }
+                }
+                true
+            }
+            Accel::Bvh => {
+                let (mut lo32, mut hi32) = ([0.0f32; 3], [0.0f32; 3]);
+                for k in 0..S::DIM {
+                    lo32[k] = -bvh_build::round_up(-lo[k]);
+                    hi32[k] = bvh_build::round_up(hi[k]);
+                }
+                let mut complete = true;
+                self.bvh.overlapping::<S>(lo32, hi32, |first, count| {
+                    for &(_, i) in &self.leaf_prims[first..first + count] {
+                        if overlaps(&self.prims[i as usize]) {
+                            out.push(i);
+                        }
+                    }
+                    complete = out.len() <= limit;
+                    !complete
+                });
+                complete
+            }
+        };
+        out.sort_unstable();
+        complete
+    }
+
+    /// [`Geometry::occluded`] testing only the primitives `ids` (e.g. those
+    /// [`Geometry::prims_in_box`] lists around a segment): the same answer as
+    /// the whole scene's whenever `ids` holds every primitive near the ray's span.
+    pub fn occluded_among(&self, ids: &[u32], o: S::Vec, d: S::Vec, t_min: f64, t_max: f64) -> bool {
+        ids.iter()
+            .any(|&i| self.prims[i as usize].intersect(o, d, t_min, t_max).is_some())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -303,6 +358,58 @@ mod tests {
             }
             assert!(hits > 500, "{name}: only {hits} rays hit: the test would be toothless");
         }
+    }
+
+    /// The tree and the flat list list the primitives whose boxes overlap a query
+    /// box exactly as a scan of every box does (boxes from a point to a third of
+    /// the soup, touching ones included), and report an overflow of the limit
+    /// exactly when the scan finds more.
+    fn boxes_match_brute_force<S: Dim>() {
+        let mut s = Sampler::new(6, S::DIM as u64);
+        let soup: Vec<Ball<S>> = (0..1500)
+            .map(|_| Ball {
+                centre: random_in::<S>(&mut s, 0.0, 10.0),
+                radius: 0.02 + 0.3 * s.next_f64(),
+            })
+            .collect();
+        let tree = Geometry::with_accel(soup.clone(), Accel::Bvh);
+        let flat = Geometry::with_accel(soup.clone(), Accel::Linear);
+        let (mut out, mut sizes) = (Vec::new(), Vec::new());
+        for q in 0..600 {
+            let c = random_in::<S>(&mut s, -1.0, 11.0);
+            let h = random_in::<S>(&mut s, 0.0, if q % 3 == 0 { 0.0 } else { 3.0 });
+            let (lo, hi) = (c - h, c + h);
+            let scan: Vec<u32> = (0..soup.len() as u32)
+                .filter(|&i| {
+                    let (a, b) = soup[i as usize].bounds();
+                    (0..S::DIM).all(|k| a[k] <= hi[k] && b[k] >= lo[k])
+                })
+                .collect();
+            sizes.push(scan.len());
+            for g in [&tree, &flat] {
+                assert!(g.prims_in_box(lo, hi, usize::MAX, &mut out));
+                assert_eq!(out, scan);
+                let limit = 8;
+                assert_eq!(g.prims_in_box(lo, hi, limit, &mut out), scan.len() <= limit);
+            }
+        }
+        // Discriminating: empty, few and many answers all occur.
+        assert!(sizes.iter().filter(|&&n| n == 0).count() > 50, "{sizes:?}");
+        assert!(
+            sizes.iter().filter(|&&n| (1..=8).contains(&n)).count() > 50,
+            "{sizes:?}"
+        );
+        assert!(sizes.iter().filter(|&&n| n > 8).count() > 50, "{sizes:?}");
+    }
+
+    #[test]
+    fn boxes_match_brute_force_2d() {
+        boxes_match_brute_force::<D2>();
+    }
+
+    #[test]
+    fn boxes_match_brute_force_3d() {
+        boxes_match_brute_force::<D3>();
     }
 
     #[test]

@@ -192,6 +192,32 @@ impl WideBvh {
         index
     }
 
+    /// Visit the leaves whose boxes overlap the box [`lo`, `hi`] (f32, rounded
+    /// outwards by the caller; axes beyond the dimension's ignored, as the
+    /// tree's): `visit(first, count)` returns true to stop. Conservative: a leaf
+    /// is never skipped when a primitive of it overlaps the box.
+    pub fn overlapping<S: Dim>(&self, lo: [f32; 3], hi: [f32; 3], mut visit: impl FnMut(usize, usize) -> bool) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack: SmallVec<[u32; 64]> = SmallVec::new();
+        stack.push(0);
+        while let Some(node) = stack.pop() {
+            let n = &self.nodes[node as usize];
+            for k in 0..WIDTH {
+                let meets = (0..S::DIM).all(|a| n.bounds[0][a][k] <= hi[a] && n.bounds[1][a][k] >= lo[a]);
+                if !meets {
+                    continue; // also an empty slot: lower +∞, upper −∞
+                }
+                if n.count[k] == 0 {
+                    stack.push(n.child[k]);
+                } else if visit(n.child[k] as usize, n.count[k] as usize) {
+                    return;
+                }
+            }
+        }
+    }
+
     /// Visit the leaves the ray o + t·d, 0 ≤ t ≤ `t_far`, overlaps; with `ORDERED`
     /// nearer children first. `visit(first, count, t_far)` tests a leaf's
     /// primitives (leaf order), may shrink `t_far` and returns true to stop.

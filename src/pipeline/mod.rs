@@ -25,6 +25,7 @@ pub mod probe;
 pub mod proxy;
 pub mod record;
 pub mod sensor;
+pub mod sight;
 pub mod silhouette;
 pub mod slide;
 pub mod surface_cache;

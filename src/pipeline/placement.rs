@@ -18,7 +18,8 @@
 use super::dim::Dim;
 use super::moments::{MomentQuery, RecordMoments};
 use super::probe::Outgoing;
-use super::record::{CacheSettings, Cached, RecordData, RecordInfo, compute_record, sees};
+use super::record::{CacheSettings, Cached, RecordData, RecordInfo, compute_record};
+use super::sight::{Near, near_record, near_table, sees_near};
 use super::world::World;
 use crate::core::cache::{Cache, Record};
 use crate::core::color::Rgb;
@@ -120,7 +121,7 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
     let metric = cs.metric(world.scale());
     let units = source.units();
     progress.start(units as u64);
-    let (mut caches, mut moments) = match earlier {
+    let (caches, mut moments) = match earlier {
         Some(p) if p.cached == cached => (p.caches, p.moments),
         _ => (
             cached.iter().map(|_| Cache::new()).collect(),
@@ -133,19 +134,24 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
         table.resize(cache.len(), RecordMoments::default());
     }
     let (mut records_seconds, mut capture_wall) = (0.0, 0.0);
-    let uncovered = |caches: &[RadianceCache<W::S>], y, rays: &mut u64| -> Vec<usize> {
+    // Per cache, per record: the occluders near it (`super::sight`).
+    let near: Vec<Vec<Near>> = caches.iter().map(|c| near_table(world, c)).collect();
+    type State<S> = (Vec<RadianceCache<S>>, Vec<Vec<Near>>);
+    let uncovered = |(caches, near): &State<W::S>, y, rays: &mut u64| -> Vec<usize> {
         (0..caches.len())
-            .filter(|&c| !caches[c].is_covered_where(y, |_, x| sees(world, x, y, rays)))
+            .filter(|&c| !caches[c].is_covered_where(y, |i, x| sees_near(world, &near[c][i], x, y, rays)))
             .collect()
     };
+    let mut state = (caches, near);
     let (query_points, rays) = walk(
         units,
         progress,
-        &mut caches,
+        &mut state,
         |k, out| source.points(k, out),
-        |caches, p: &QueryPoint<W::S>, rays| !uncovered(caches, p.y, rays).is_empty(),
-        |caches, p, rays| {
-            let missing = uncovered(caches, p.y, rays);
+        |st, p: &QueryPoint<W::S>, rays| !uncovered(st, p.y, rays).is_empty(),
+        |st, p, rays| {
+            let missing = uncovered(st, p.y, rays);
+            let (caches, near) = st;
             if missing.is_empty() {
                 return Ok(());
             }
@@ -166,13 +172,16 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
                 };
                 // A non-finite light field is refused by the cache: the point stays
                 // uncovered (reported by the reconstruction) rather than failing.
+                let near_it = near_record(world, record.position, &record.extent);
                 if caches[c].insert(record).is_ok() {
                     moments[c].push(d.moment_payload(cached[c]));
+                    near[c].push(near_it);
                 }
             }
             Ok(())
         },
     )?;
+    let (caches, _) = state;
     Ok(Placement {
         caches,
         cached: cached.to_vec(),
@@ -287,16 +296,16 @@ pub fn place_with_count<W: World, Q: QuerySource<W::S>>(
 
 /// L_s at `y` from the covering records that see it, clamped at zero (radiance is
 /// non-negative; an extrapolated gradient can overshoot). None when no visible
-/// record covers `y`.
+/// record covers `y`. `near`: the records' occluders, [`near_table`] of `cache`.
 pub fn interpolate<W: World>(
     world: &W,
-    cache: &RadianceCache<W::S>,
+    (cache, near): (&RadianceCache<W::S>, &[Near]),
     y: <W::S as crate::core::space::Space>::Vec,
     second_order: bool,
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
-    interpolate_by(world, cache, y, second_order, scratch, rays, |i| {
+    interpolate_by(world, (cache, near), y, second_order, scratch, rays, |i| {
         cache.records()[i].value
     })
 }
@@ -306,7 +315,7 @@ pub fn interpolate<W: World>(
 #[allow(clippy::too_many_arguments)] // interpolate's inputs and the moments'
 pub fn interpolate_moments<W: World>(
     world: &W,
-    cache: &RadianceCache<W::S>,
+    (cache, near): (&RadianceCache<W::S>, &[Near]),
     table: &[RecordMoments<W::S>],
     query: &MomentQuery<W::S>,
     y: <W::S as crate::core::space::Space>::Vec,
@@ -314,21 +323,21 @@ pub fn interpolate_moments<W: World>(
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
-    interpolate_by(world, cache, y, second_order, scratch, rays, |i| {
+    interpolate_by(world, (cache, near), y, second_order, scratch, rays, |i| {
         table[i].towards(&cache.records()[i].value, query)
     })
 }
 
 fn interpolate_by<W: World>(
     world: &W,
-    cache: &RadianceCache<W::S>,
+    (cache, near): (&RadianceCache<W::S>, &[Near]),
     y: <W::S as crate::core::space::Space>::Vec,
     second_order: bool,
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
     payload: impl Fn(usize) -> TaylorRgb<W::S>,
 ) -> Option<Rgb> {
-    let keep = |_: usize, x| sees(world, x, y, rays);
+    let keep = |i: usize, x| sees_near(world, &near[i], x, y, rays);
     interpolate_kept(cache, y, second_order, scratch, keep, payload)
 }
 

@@ -220,15 +220,3 @@ impl<S: Dim> RecordInfo<S> {
         }
     }
 }
-
-/// A record at x may be used at y: it sees y (a record never extrapolates across a
-/// surface, where radiance jumps).
-pub fn sees<W: World>(world: &W, x: <W::S as Space>::Vec, y: <W::S as Space>::Vec, rays: &mut u64) -> bool {
-    let d = y - x;
-    let len = W::S::length(d);
-    if len == 0.0 {
-        return true;
-    }
-    *rays += 1;
-    !world.occluded(x, d / len, len, None)
-}

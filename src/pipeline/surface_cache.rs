@@ -15,6 +15,7 @@ use super::dim::Dim;
 use super::placement::{RadianceCache, interpolate_kept, memoised, walk};
 use super::probe::SurfaceReceiver;
 use super::record::CacheSettings;
+use super::sight::{Near, near_record, sees_near};
 use super::surface_record::{SurfaceRecordData, compute_surface_record};
 use super::world::World;
 use crate::core::cache::{Cache, Record};
@@ -60,6 +61,8 @@ pub struct SurfaceCache<S: Dim> {
     pub cache: RadianceCache<S>,
     /// Per record, its unit normal.
     pub normals: Vec<S::Vec>,
+    /// Per record, the occluders near it (`super::sight`).
+    pub near: Vec<Near>,
     pub eps: f64,
     pub query_points: u64,
     pub rays: u64,
@@ -77,14 +80,14 @@ impl<S: Dim> SurfaceCache<S> {
 /// (see the module docs), as the cache's filter.
 fn serving<W: World>(
     world: &W,
-    sc: (&RadianceCache<W::S>, &[<W::S as Space>::Vec]),
+    (normals, near): (&[<W::S as Space>::Vec], &[Near]),
     (y, n): (<W::S as Space>::Vec, <W::S as Space>::Vec),
     rays: &mut u64,
 ) -> impl FnMut(usize, <W::S as Space>::Vec) -> bool {
     let lift = 1e-6 * world.scale();
     move |i, x| {
-        let m = sc.1[i];
-        W::S::dot(m, n) >= NORMAL_AGREEMENT && super::record::sees(world, x + m * lift, y + n * lift, rays)
+        let m = normals[i];
+        W::S::dot(m, n) >= NORMAL_AGREEMENT && sees_near(world, &near[i], x + m * lift, y + n * lift, rays)
     }
 }
 
@@ -101,11 +104,11 @@ pub fn place_surfaces<W: World, Q: SurfaceSource<W::S>>(
     let metric = cs.metric(world.scale());
     let units = source.units();
     progress.start(units as u64);
-    type State<S> = (RadianceCache<S>, Vec<<S as Space>::Vec>);
-    let mut state: State<W::S> = (Cache::new(), Vec::new());
+    type State<S> = (RadianceCache<S>, Vec<<S as Space>::Vec>, Vec<Near>);
+    let mut state: State<W::S> = (Cache::new(), Vec::new(), Vec::new());
     let (mut records_seconds, mut capture_wall) = (0.0, 0.0);
-    let covered = |(cache, normals): &State<W::S>, p: &SurfaceQuery<W::S>, rays: &mut u64| {
-        cache.is_covered_where(p.y, serving(world, (cache, normals), (p.y, p.normal), rays))
+    let covered = |(cache, normals, near): &State<W::S>, p: &SurfaceQuery<W::S>, rays: &mut u64| {
+        cache.is_covered_where(p.y, serving(world, (normals, near), (p.y, p.normal), rays))
     };
     let (query_points, rays) = walk(
         units,
@@ -136,16 +139,19 @@ pub fn place_surfaces<W: World, Q: SurfaceSource<W::S>>(
             };
             // A non-finite light field is refused: the point stays uncovered and is
             // path traced by the reconstruction.
+            let near_it = near_record(world, record.position, &record.extent);
             if st.0.insert(record).is_ok() {
                 st.1.push(d.normal);
+                st.2.push(near_it);
             }
             Ok(())
         },
     )?;
-    let (cache, normals) = state;
+    let (cache, normals, near) = state;
     Ok(SurfaceCache {
         cache,
         normals,
+        near,
         eps: cs.eps,
         query_points,
         rays,
@@ -164,7 +170,7 @@ pub fn interpolate_surface<W: World>(
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
-    let keep = serving(world, (&sc.cache, &sc.normals), (y, n), rays);
+    let keep = serving(world, (&sc.normals, &sc.near), (y, n), rays);
     interpolate_kept(&sc.cache, y, second_order, scratch, keep, |i| {
         sc.cache.records()[i].value
     })

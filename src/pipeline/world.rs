@@ -72,6 +72,18 @@ pub trait World: Sync {
     fn closest_hit(&self, o: VecOf<Self>, d: VecOf<Self>, t_max: f64, skip: Option<u32>) -> Option<Hit>;
     /// Is o + t·d blocked for some t < t_max (other than by `skip`)?
     fn occluded(&self, o: VecOf<Self>, d: VecOf<Self>, t_max: f64, skip: Option<u32>) -> bool;
+    /// The occluders whose bounding boxes overlap the box [`lo`, `hi`], into
+    /// `out` in increasing index; false when there are more than `limit` or the
+    /// world cannot list them (then only [`World::occluded`] answers).
+    fn occluders_in_box(&self, _lo: VecOf<Self>, _hi: VecOf<Self>, _limit: usize, _out: &mut Vec<u32>) -> bool {
+        false
+    }
+    /// [`World::occluded`] (nothing skipped) testing only the occluders `ids`: the
+    /// same answer whenever `ids` lists every occluder near the ray's span (as
+    /// [`World::occluders_in_box`] of a box holding it does).
+    fn occluded_among(&self, _ids: &[u32], o: VecOf<Self>, d: VecOf<Self>, t_max: f64) -> bool {
+        self.occluded(o, d, t_max, None)
+    }
     /// The centre of the scene's bounds.
     fn centre(&self) -> VecOf<Self>;
     /// Distance along p + t·d to the sphere of [`WORLD_RADIUS`] scene sizes around

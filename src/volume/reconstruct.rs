@@ -20,6 +20,7 @@ use crate::core::space::D3;
 use crate::pipeline::moments::{MomentQuery, weights_towards};
 use crate::pipeline::path::{radiance_leaving, sample_at};
 use crate::pipeline::placement::{interpolate, interpolate_moments};
+use crate::pipeline::sight::near_table;
 use crate::pipeline::world::World;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
@@ -40,6 +41,8 @@ pub fn reconstruct(
     let mut weights: (DVec3, Vec<f64>) = (DVec3::ZERO, Vec::new());
     let g = scene.medium.as_ref().map_or(0.0, |m| m.g());
     let cache = view.cache;
+    // The records' occluders, listed once: most visibility tests need no ray.
+    let near = near_table(scene, cache);
     let settings = &params.image.settings;
     let mut surface_scratch: Vec<(usize, f64)> = Vec::new();
     let paths = params.surface_paths;
@@ -71,9 +74,18 @@ pub fn reconstruct(
                     omega_o: -*travel,
                     g,
                 };
-                interpolate_moments(scene, cache, table, &query, p, second_order, &mut scratch, rays)
+                interpolate_moments(
+                    scene,
+                    (cache, &near),
+                    table,
+                    &query,
+                    p,
+                    second_order,
+                    &mut scratch,
+                    rays,
+                )
             }
-            _ => interpolate(scene, cache, p, second_order, &mut scratch, rays),
+            _ => interpolate(scene, (cache, &near), p, second_order, &mut scratch, rays),
         };
         match cached {
             Some(c) => (direct + c, true),

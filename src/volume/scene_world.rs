@@ -32,6 +32,15 @@ impl World for Scene {
         self.geometry.occluded(o, d, self.t_min(), t_max, skip)
     }
 
+    fn occluders_in_box(&self, lo: DVec3, hi: DVec3, limit: usize, out: &mut Vec<u32>) -> bool {
+        self.geometry.prims_in_box(lo, hi, limit, out)
+    }
+
+    fn occluded_among(&self, ids: &[u32], o: DVec3, d: DVec3, t_max: f64) -> bool {
+        // The bounds of `occluded`, so that the answers agree.
+        self.geometry.occluded_among(ids, o, d, self.t_min(), t_max)
+    }
+
     fn centre(&self) -> DVec3 {
         0.5 * (self.bounds.min + self.bounds.max)
     }
