@@ -44,6 +44,10 @@ pub struct Cache3dArgs {
     /// Distance between march points along camera rays (default: scene size / 128).
     #[arg(long)]
     pub march_step: Option<f64>,
+    /// With --time-budget: the march step of the camera samples beyond the placed
+    /// ones (default: --march-step). Coarser is cheaper per sample and as unbiased.
+    #[arg(long)]
+    pub image_march_step: Option<f64>,
     /// Reflected-light samples per camera sample at the first surface.
     #[arg(long, default_value_t = 4)]
     pub surface_paths: u32,
@@ -117,6 +121,10 @@ impl Cache3dArgs {
         if let Some(d) = self.march_step {
             anyhow::ensure!(finite_pos(d), "--march-step must be a positive distance");
             cp.march_step = d;
+        }
+        if let Some(d) = self.image_march_step {
+            anyhow::ensure!(finite_pos(d), "--image-march-step must be a positive distance");
+            cp.image_march_step = Some(d);
         }
         if self.surface_cache == SurfaceCacheArg::Ours {
             let e = self.surface_eps.unwrap_or_else(|| default_surface_eps(scene));

@@ -38,6 +38,12 @@ pub struct CachedRenderParams {
     /// then more while the budget lasts; points no record covers are path traced.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub place_spp: Option<u32>,
+    /// March step of the camera samples beyond the placed ones (None: `march_step`).
+    /// Their march is as unbiased at any step (stratified, jittered), and a coarser
+    /// one makes a sample cheaper: the time budget's samples are then spent across
+    /// the pixel rather than along its rays.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub image_march_step: Option<f64>,
 }
 
 impl CachedRenderParams {
@@ -48,6 +54,7 @@ impl CachedRenderParams {
             surface_paths: 4,
             surface_eps: None,
             place_spp: None,
+            image_march_step: None,
         }
     }
 
@@ -55,6 +62,14 @@ impl CachedRenderParams {
     pub fn placed_spp(&self) -> u32 {
         let spp = self.image.spp.max(1);
         self.place_spp.map_or(spp, |p| p.clamp(1, spp))
+    }
+
+    /// The march step of camera sample `k` of a pixel.
+    pub fn march_step_of(&self, k: u32) -> f64 {
+        match self.image_march_step {
+            Some(step) if k >= self.placed_spp() => step,
+            _ => self.march_step,
+        }
     }
 }
 

@@ -134,12 +134,13 @@ where
         };
     let (mut medium, mut uncovered) = (Rgb::ZERO, 0u64);
     if let Some(m) = &scene.medium {
-        let dt = ray.step(params.march_step);
+        let step = params.march_step_of(k);
+        let dt = ray.step(step);
         let lobe = Lobe::Phase {
             phase: m.phase,
             travel: ray.dir,
         };
-        for (_, t, weight) in ray.march(params.march_step) {
+        for (_, t, weight) in ray.march(step) {
             let p = ray.at(t);
             let (v, covered) = l_s(p, &lobe, m.sigma_s, &mut s, rays);
             uncovered += !covered as u64;
