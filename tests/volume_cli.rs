@@ -165,6 +165,23 @@ fn bad_input_is_a_clear_error() {
         &["render3d", s, "--method", "ours", "--march-step", "0"],
         "--march-step",
     );
+    fails_with(
+        &["render3d", s, "--method", "ours", "--image-march-step", "0.5"],
+        "--time-budget",
+    );
+    fails_with(
+        &[
+            "render3d",
+            s,
+            "--method",
+            "ours",
+            "--time-budget",
+            "5",
+            "--image-march-step",
+            "0",
+        ],
+        "--image-march-step",
+    );
     fails_with(&["render3d", s, "--method", "ours", "--eps", "nan"], "--eps");
     fails_with(&["render3d", s, "--res", "10x4", "--tile", "0/5"], "at most 4 tiles");
     fails_with(&["render3d", s, "--tile", "3/3"], "0 <= i < n");

@@ -123,6 +123,10 @@ impl Cache3dArgs {
             cp.march_step = d;
         }
         if let Some(d) = self.image_march_step {
+            anyhow::ensure!(
+                image.time_budget.is_some(),
+                "--image-march-step sets the march of the camera samples a --time-budget adds: give --time-budget"
+            );
             anyhow::ensure!(finite_pos(d), "--image-march-step must be a positive distance");
             cp.image_march_step = Some(d);
         }
