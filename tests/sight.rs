@@ -155,11 +155,11 @@ fn listed_occluders_answer_as_the_ray_cast_in_3d() {
     assert!(t.hidden * 20 >= t.tests, "{t:?}");
 }
 
-/// 2D: 300 random segments (a BVH) in the unit square.
+/// 2D: 1000 random segments (a BVH) in the unit square.
 #[test]
 fn listed_occluders_answer_as_the_ray_cast_in_2d() {
     let mut s = Sampler::new(12, 2);
-    let segments: Vec<String> = (0..300)
+    let segments: Vec<String> = (0..1000)
         .map(|_| {
             let a = [2.0 * s.next_f64() - 1.0, 2.0 * s.next_f64() - 1.0];
             let angle = std::f64::consts::TAU * s.next_f64();

@@ -20,7 +20,9 @@ use crate::core::space::Space;
 use rayon::prelude::*;
 
 /// Above this many occluders near a record, its tests cast rays through the tree.
-pub const FEW_OCCLUDERS: usize = 16;
+/// Measured on the staircase's reconstruction (86 triangles, one pinned core,
+/// median of 3 pairs): 64 takes 0.89× the time of 16; 256 no less than 64.
+pub const FEW_OCCLUDERS: usize = 64;
 
 /// The occluders that could come between a record and the points it covers.
 #[derive(Clone, Debug, PartialEq)]
