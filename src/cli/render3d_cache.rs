@@ -249,11 +249,12 @@ pub fn run_cached(
     let second_order = cs.second_order && method == CacheMethod::Ours;
     let view = CacheView::of(&placement).with_surfaces(surfaces.as_ref());
     // A time budget is the whole method's: what records took is not left for the image.
-    let spent = if records.records_in.is_none() {
+    let placed = if records.records_in.is_none() {
         placement.seconds
     } else {
         0.0
-    } + surfaces.as_ref().map_or(0.0, |s| s.seconds);
+    };
+    let spent = placed + surfaces.as_ref().map_or(0.0, |s| s.seconds);
     let r = reconstruct(scene, &image_after(&cp, spent), view, second_order, progress)?;
     summary.reconstruction_seconds = r.image.seconds;
     summary.reconstruction_rays = r.image.rays;

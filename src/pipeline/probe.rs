@@ -604,8 +604,7 @@ fn escaped_radiance<W: World>(
         return Rgb::ZERO;
     }
     let t_true = world.transmittance(x, dir, world.world_exit(x, dir));
-    let t_model = (-sigma_t_x * length).exp();
-    sky * Rgb::select(t_model.cmpgt(Rgb::splat(1e-200)), t_true / t_model, Rgb::ZERO)
+    sky * true_over_model(t_true, sigma_t_x, length)
 }
 
 /// T_true(x → x + t·dir) / exp(−σ_t(x)·t): what makes the proxy's homogeneous
@@ -617,7 +616,11 @@ fn model_correction<W: World>(
     t: f64,
     sigma_t_x: Rgb,
 ) -> Rgb {
+    true_over_model(world.transmittance(x, dir, t), sigma_t_x, t)
+}
+
+/// `t_true` / exp(−σ_t(x)·t), zero where the model's transmittance underflows.
+fn true_over_model(t_true: Rgb, sigma_t_x: Rgb, t: f64) -> Rgb {
     let t_model = (-sigma_t_x * t).exp();
-    let t_true = world.transmittance(x, dir, t);
     Rgb::select(t_model.cmpgt(Rgb::splat(1e-200)), t_true / t_model, Rgb::ZERO)
 }
