@@ -396,4 +396,25 @@ fn compare3d_and_tradeoff3d_write_their_reports() {
     for s in t["speedups"].as_array().unwrap() {
         assert!(finite(&s["speedup"]) && s["speedup"].as_f64().unwrap() > 0.0, "{s}");
     }
+    // The time-to-error table: 3%, 1%, 0.3% of the image and of its medium part,
+    // each judged against the reference's noise and timed per method when above it.
+    let targets = t["targets"].as_array().unwrap();
+    let of = |r: &serde_json::Value| (r["of"].as_str().unwrap().to_string(), r["relative"].as_f64().unwrap());
+    let rows: Vec<(String, f64)> = targets.iter().map(of).collect();
+    let expected: Vec<(String, f64)> = ["image", "medium"]
+        .iter()
+        .flat_map(|o| [0.03, 0.01, 0.003].map(|r| (o.to_string(), r)))
+        .collect();
+    assert_eq!(rows, expected);
+    for r in targets {
+        let noise = r["reference_noise"].as_f64().unwrap();
+        assert!(noise.is_finite() && noise > 0.0, "{r}");
+        let measurable = r["error"].as_f64().unwrap() > noise;
+        assert_eq!(r["measurable"], measurable, "{r}");
+        assert_eq!(
+            r["times"].as_array().unwrap().len(),
+            if measurable { 3 } else { 0 },
+            "{r}"
+        );
+    }
 }

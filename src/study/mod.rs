@@ -15,7 +15,8 @@
 //!   fresh run; path tracing at a sample count).
 //! - [`runs3d`]: the 3D comparison runs (a cache method at a record count, path
 //!   tracing at a sample count or a time budget); [`speedup`]: the speed-up of ours
-//!   over Jarosz 2008 at equal error.
+//!   over Jarosz 2008 at equal error; [`targets`]: each method's time to 3%, 1% and
+//!   0.3% relative RMSE (the reference's noise removed) and the ratios to ours.
 //! - [`light_field_derivs`]: a point's derivatives by every method (aware and
 //!   unaware on one shared light field, the reference in batches);
 //!   [`gradients`]: the gradient study over a grid and a line;
@@ -34,3 +35,4 @@ pub mod runs3d;
 pub mod seeds;
 pub mod speedup;
 pub mod stored;
+pub mod targets;
