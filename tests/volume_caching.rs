@@ -3,6 +3,9 @@
 //! Hole-free, thread-independent placement is checked in both dimensions in
 //! `dims_caching.rs`.
 
+mod room3d;
+
+use room3d::ROOM;
 use std::path::Path;
 use volcache::core::color::{Rgb, luminance};
 use volcache::core::metric::CacheMethod;
@@ -10,12 +13,13 @@ use volcache::core::stats::ImageErrors;
 use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CacheView, CachedRenderParams, RecordMemo, default_eps, march_reference, place, reconstruct,
-    render_cached,
+    CacheSettings, CacheView, CachedRenderParams, RecordMemo, default_eps, march_reference, place, place_surfaces,
+    reconstruct, render_cached,
 };
 use volcache::volume::records_file::{RecordsFile, ValidFor};
 use volcache::volume::render::{RenderParams, render};
 use volcache::volume::scene::Scene;
+use volcache::volume::surface_cache::default_surface_eps;
 
 fn load(name: &str) -> Scene {
     Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes3d").join(name)).unwrap()
@@ -194,10 +198,12 @@ fn records_file_round_trips() {
         let cs = settings(method, &s, 256, 8, 3);
         let a = render_cached(&s, &p, &cs, None, &mut RecordMemo::new(), &Progress::new()).unwrap();
         assert!(a.placement.record_count() > 5, "{method:?}");
-        let file = RecordsFile::from_placement(&s, &p, method, &a.placement);
+        let file = RecordsFile::from_placement(&s, &p, method, &a.placement, None);
         let text = serde_json::to_string(&file).unwrap();
-        let (back, cache) = RecordsFile::parse(&text, "records.json").unwrap();
+        let loaded = RecordsFile::parse(&text, "records.json").unwrap();
+        let (back, cache) = (loaded.file, loaded.cache);
         assert_eq!(back, file);
+        assert!(loaded.surfaces.is_none() && !text.contains("surfaces"));
         assert_eq!(cache.records(), a.placement.caches[0].records());
         assert_eq!(back.valid_for.mismatch(&ValidFor::of(&s, &p)), None);
         let second_order = false;
@@ -233,9 +239,11 @@ fn bad_records_files_are_clear_errors() {
     let p = params(&s, 6, 6, 1, 16.0);
     let cs = settings(CacheMethod::Ours, &s, 64, 4, 1);
     let placed = place(&s, &p, &cs, &mut RecordMemo::new(), &Progress::new()).unwrap();
-    let good = serde_json::to_value(RecordsFile::from_placement(&s, &p, CacheMethod::Ours, &placed)).unwrap();
+    let good = serde_json::to_value(RecordsFile::from_placement(&s, &p, CacheMethod::Ours, &placed, None)).unwrap();
     let check = |v: serde_json::Value, want: &str| {
-        let err = RecordsFile::parse(&v.to_string(), "r.json").unwrap_err();
+        let Err(err) = RecordsFile::parse(&v.to_string(), "r.json") else {
+            panic!("accepted")
+        };
         assert!(err.starts_with("r.json") && err.contains(want), "{err}");
     };
     let mut v = good.clone();
@@ -250,8 +258,57 @@ fn bad_records_files_are_clear_errors() {
     let mut v = good.clone();
     v["format"] = serde_json::json!("something else");
     check(v, "format");
-    let err = RecordsFile::parse("{not json", "r.json").unwrap_err();
+    let Err(err) = RecordsFile::parse("{not json", "r.json") else {
+        panic!("accepted")
+    };
     assert!(err.starts_with("r.json"), "{err}");
+}
+
+/// The surface cache rides in the records file: read back, it is the placed one
+/// (records, normals, listed occluders, costs) and reconstructs the same image;
+/// a bent normal or a bad surface record is refused with its JSON path.
+#[test]
+fn records_file_round_trips_the_surface_cache() {
+    let s = scene(ROOM);
+    let mut p = params(&s, 16, 12, 2, 32.0);
+    p.surface_eps = Some(default_surface_eps(&s));
+    let cs = settings(CacheMethod::Ours, &s, 128, 4, 2);
+    let progress = Progress::new();
+    let placed = place(&s, &p, &cs, &mut RecordMemo::new(), &progress).unwrap();
+    let surfaces = place_surfaces(&s, &p, &cs, &progress).unwrap().unwrap();
+    assert!(surfaces.record_count() > 3, "{}", surfaces.record_count());
+    let file = RecordsFile::from_placement(&s, &p, CacheMethod::Ours, &placed, Some(&surfaces));
+    let text = serde_json::to_string(&file).unwrap();
+    let loaded = RecordsFile::parse(&text, "records.json").unwrap();
+    assert_eq!(loaded.file, file);
+    let back = loaded.surface_cache(&s).unwrap();
+    assert_eq!(back.cache.records(), surfaces.cache.records());
+    assert_eq!((&back.normals, &back.near), (&surfaces.normals, &surfaces.near));
+    assert_eq!(
+        (back.eps, back.query_points, back.rays, back.seconds),
+        (surfaces.eps, surfaces.query_points, surfaces.rays, surfaces.seconds)
+    );
+    let image = |sc| {
+        let view = CacheView::records(&placed.caches[0]).with_surfaces(Some(sc));
+        reconstruct(&s, &p, view, false, &progress).unwrap().image.values
+    };
+    assert_eq!(image(&back), image(&surfaces));
+    let good = serde_json::to_value(&file).unwrap();
+    let check = |v: serde_json::Value, want: &str| {
+        let Err(err) = RecordsFile::parse(&v.to_string(), "r.json") else {
+            panic!("accepted {want}")
+        };
+        assert!(err.starts_with("r.json") && err.contains(want), "{err}");
+    };
+    let mut v = good.clone();
+    v["surfaces"]["records"][1]["normal"] = serde_json::json!([0.0, 1.0, 0.1]);
+    check(v, "surfaces.records[1].normal");
+    let mut v = good.clone();
+    v["surfaces"]["records"][0]["record"]["radii"][2] = serde_json::json!(0.0);
+    check(v, "surfaces.records[0].record.radii[2]");
+    let mut v = good;
+    v["surfaces"]["eps"] = serde_json::json!(-1.0);
+    check(v, "surfaces.eps");
 }
 
 /// Users push parameters to the extremes: nothing turns into NaN, inf or a hang.

@@ -2,6 +2,8 @@
 //! with tiles sharing a records file, clear errors for bad options, crops, scenes and
 //! records files, and Ctrl-C (exit 130, nothing written).
 
+mod room3d;
+
 use std::process::Command;
 
 fn volcache() -> Command {
@@ -145,19 +147,6 @@ fn bad_input_is_a_clear_error() {
     );
     fails_with(&["render3d", s, "--method", "ours", "--rays", "2"], "--rays");
     fails_with(
-        &[
-            "render3d",
-            s,
-            "--method",
-            "ours",
-            "--surface-cache",
-            "ours",
-            "--records-out",
-            "/tmp/never.json",
-        ],
-        "--surface-cache",
-    );
-    fails_with(
         &["render3d", s, "--method", "ours", "--surface-eps", "0.1"],
         "--surface-eps",
     );
@@ -284,6 +273,113 @@ fn tiles_sharing_records_merge_into_the_full_render() {
     std::fs::write(d.join("broken.json"), "{\"format\": 3}").unwrap();
     let err = with_records("24x18", "broken.json");
     assert!(err.contains("broken.json") && err.contains("format"), "{err}");
+    // A file without surface records cannot serve a render with a surface cache.
+    let err = failure(volcache().args(base).args([
+        "--surface-cache",
+        "ours",
+        "--records-in",
+        &path("records.json"),
+        "--out",
+        &path("bad"),
+    ]));
+    assert!(
+        err.contains("records.json") && err.contains("no surface records"),
+        "{err}"
+    );
+    assert!(!d.join("bad").exists());
+}
+
+/// With a surface cache, the records file carries the surface records too: tiles
+/// reconstructing from it merge into the full render bit for bit, the merge counts
+/// both placements once, and another --surface-eps than the file's is refused.
+#[test]
+fn tiles_share_the_surface_cache_through_the_records_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |p: &str| d.join(p).display().to_string();
+    std::fs::write(d.join("room.json"), room3d::ROOM).unwrap();
+    let scene = path("room.json");
+    let render = |extra: &[&str]| {
+        let mut cmd = volcache();
+        cmd.args([
+            "render3d",
+            &scene,
+            "--method",
+            "ours",
+            "--res",
+            "20x15",
+            "--spp",
+            "2",
+            "--rays",
+            "128",
+            "--steps",
+            "4",
+            "--surface-cache",
+            "ours",
+            "--quiet",
+        ])
+        .args(extra);
+        cmd
+    };
+    let ok = |extra: &[&str]| {
+        let out = render(extra).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    ok(&["--records-out", &path("records.json"), "--out", &path("full")]);
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("records.json")).unwrap()).unwrap();
+    let surface_records = file["surfaces"]["records"].as_array().unwrap().len();
+    assert!(surface_records > 3, "{surface_records} surface records");
+    for i in 0..2 {
+        let tile = format!("{i}/2");
+        ok(&[
+            "--records-in",
+            &path("records.json"),
+            "--tile",
+            &tile,
+            "--out",
+            &path("tiles"),
+        ]);
+    }
+    let tiles: Vec<String> = (0..2)
+        .map(|i| path(&format!("tiles/room_ours_tile{i}of2.json")))
+        .collect();
+    let out = volcache()
+        .arg("merge3d")
+        .args(&tiles)
+        .args(["--out", &path("merged")])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in ["room_ours.exr", "room_ours_medium.exr"] {
+        let (a, b) = (
+            std::fs::read(d.join("full").join(f)).unwrap(),
+            std::fs::read(d.join("merged").join(f)).unwrap(),
+        );
+        assert!(a == b, "{f}: merged tiles differ from the full render");
+    }
+    let read =
+        |f: &str| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap() };
+    let (full, merged) = (read("full/room_ours.json"), read("merged/room_ours.json"));
+    assert_eq!(full["cache"]["surfaces"]["records"], surface_records);
+    assert_eq!(merged["cache"]["surfaces"]["records"], surface_records);
+    // The merge's time holds both placements once, beside the tiles' reconstructions.
+    let placed =
+        full["cache"]["placement_seconds"].as_f64().unwrap() + full["cache"]["surfaces"]["seconds"].as_f64().unwrap();
+    assert!(merged["seconds"].as_f64().unwrap() > placed, "{merged}");
+    let err = failure(&mut render(&[
+        "--records-in",
+        &path("records.json"),
+        "--surface-eps",
+        "0.5",
+        "--out",
+        &path("bad"),
+    ]));
+    assert!(err.contains("records.json") && err.contains("--surface-eps"), "{err}");
     assert!(!d.join("bad").exists());
 }
 

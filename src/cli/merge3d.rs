@@ -135,9 +135,10 @@ pub fn run(a: Merge3dArgs) -> anyhow::Result<ExitCode> {
                 .is_some_and(|tc| tc.records_in.is_some() && tc.records == c.records && tc.eps == c.eps)
         });
         if shared {
-            // Every tile reconstructed from the same records: placement counted once.
-            seconds += c.placement_seconds;
-            rays += c.placement_rays;
+            // Every tile reconstructed from the same records (the surface cache's too,
+            // when they have one): placement counted once.
+            seconds += c.placement_seconds + c.surfaces.as_ref().map_or(0.0, |s| s.seconds);
+            rays += c.placement_rays + c.surfaces.as_ref().map_or(0, |s| s.rays);
         } else {
             eprintln!(
                 "note: the tiles placed their own records (no shared --records-in): near tile borders the \

@@ -13,7 +13,8 @@ use volcache::volume::cached::{
     CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, image_after, place,
     place_surfaces, place_with_count, reconstruct,
 };
-use volcache::volume::records_file::{RecordsFile, ValidFor};
+use volcache::volume::cached_params::SurfaceCache;
+use volcache::volume::records_file::{Loaded, RecordsFile, ValidFor};
 use volcache::volume::render::{RenderParams, Rendered};
 use volcache::volume::scene::Scene;
 use volcache::volume::surface_cache::default_surface_eps;
@@ -161,6 +162,31 @@ impl Cache3dArgs {
     }
 }
 
+/// The surface cache of a records file, for a render with `--surface-cache ours`
+/// (`asked`: its `--surface-eps`, if given, which must be the file's).
+fn file_surfaces(
+    loaded: &Loaded,
+    scene: &Scene,
+    asked: Option<f64>,
+    path: &std::path::Path,
+) -> anyhow::Result<SurfaceCache> {
+    let Some(surfaces) = loaded.surface_cache(scene) else {
+        anyhow::bail!(
+            "--records-in {}: the file holds no surface records (write it with --records-out and \
+             --surface-cache ours), but the render asks for --surface-cache ours",
+            path.display()
+        );
+    };
+    if let Some(e) = asked.filter(|&e| e != surfaces.eps) {
+        anyhow::bail!(
+            "--records-in {}: its surface records were placed with --surface-eps {}, not {e}",
+            path.display(),
+            surfaces.eps
+        );
+    }
+    Ok(surfaces)
+}
+
 /// Place (or load) and reconstruct (`place_spp`: the camera samples placement
 /// visits, when the image takes more within a time budget). Returns no image with
 /// `--place-only`.
@@ -173,18 +199,15 @@ pub fn run_cached(
     progress: &Progress,
 ) -> anyhow::Result<(Option<Rendered>, CacheSummary)> {
     let (cs, mut cp) = a.settings(scene, image, method)?;
-    anyhow::ensure!(
-        cp.surface_eps.is_none() || (records.records_in.is_none() && records.records_out.is_none()),
-        "--surface-cache ours cannot be shared through --records-in/--records-out yet: records files hold \
-         the medium's records only, and tiles would each place their own surface records"
-    );
     if let Some(p) = place_spp {
         check_spp("--spp", p, volcache::limits::MAX_SPP)?;
         cp.place_spp = Some(p);
     }
+    let mut loaded_surfaces = None;
     let placement = match &records.records_in {
         Some(path) => {
-            let (file, cache) = RecordsFile::load(path).map_err(|e| anyhow::anyhow!("--records-in {e}"))?;
+            let loaded = RecordsFile::load(path).map_err(|e| anyhow::anyhow!("--records-in {e}"))?;
+            let file = &loaded.file;
             anyhow::ensure!(
                 file.method == method,
                 "--records-in {}: the records were placed by {:?}, not {:?}",
@@ -195,14 +218,17 @@ pub fn run_cached(
             if let Some(why) = file.valid_for.mismatch(&ValidFor::of(scene, &cp)) {
                 anyhow::bail!("--records-in {}: {why}", path.display());
             }
+            if cp.surface_eps.is_some() {
+                loaded_surfaces = Some(file_surfaces(&loaded, scene, a.surface_eps, path)?);
+            }
             Placement {
-                caches: vec![cache],
+                caches: vec![loaded.cache],
                 cached: vec![Cached::Scattered],
                 moments: vec![Vec::new()],
-                eps: file.eps,
-                query_points: file.query_points,
-                rays: file.placement_rays,
-                seconds: file.placement_seconds,
+                eps: loaded.file.eps,
+                query_points: loaded.file.query_points,
+                rays: loaded.file.placement_rays,
+                seconds: loaded.file.placement_seconds,
             }
         }
         None => {
@@ -213,8 +239,14 @@ pub fn run_cached(
             }
         }
     };
+    // The surface records: from the file, or placed here (before a records file is
+    // written, which carries them, even with --place-only).
+    let surfaces = match loaded_surfaces {
+        Some(s) => Some(s),
+        None => place_surfaces(scene, &cp, &cs, progress)?,
+    };
     if let Some(path) = &records.records_out {
-        let file = RecordsFile::from_placement(scene, &cp, method, &placement);
+        let file = RecordsFile::from_placement(scene, &cp, method, &placement, surfaces.as_ref());
         wrote(path, write_json(path, &file))?;
     }
     let mut summary = CacheSummary {
@@ -233,28 +265,26 @@ pub fn run_cached(
         uncovered: 0,
         records_in: records.records_in.as_ref().map(|p| p.display().to_string()),
         records_out: records.records_out.as_ref().map(|p| p.display().to_string()),
-        surfaces: None,
+        surfaces: surfaces.as_ref().map(|s| SurfaceSummary {
+            eps: s.eps,
+            records: s.record_count(),
+            query_points: s.query_points,
+            seconds: s.seconds,
+            rays: s.rays,
+        }),
     };
     if records.place_only {
         return Ok((None, summary));
     }
-    let surfaces = place_surfaces(scene, &cp, &cs, progress)?;
-    summary.surfaces = surfaces.as_ref().map(|s| SurfaceSummary {
-        eps: s.eps,
-        records: s.record_count(),
-        query_points: s.query_points,
-        seconds: s.seconds,
-        rays: s.rays,
-    });
     let second_order = cs.second_order && method == CacheMethod::Ours;
     let view = CacheView::of(&placement).with_surfaces(surfaces.as_ref());
-    // A time budget is the whole method's: what records took is not left for the image.
-    let placed = if records.records_in.is_none() {
-        placement.seconds
+    // A time budget is the whole method's: what records took here is not left for
+    // the image (records read from a file were paid for by the run that placed them).
+    let spent = if records.records_in.is_none() {
+        placement.seconds + surfaces.as_ref().map_or(0.0, |s| s.seconds)
     } else {
         0.0
     };
-    let spent = placed + surfaces.as_ref().map_or(0.0, |s| s.seconds);
     let r = reconstruct(scene, &image_after(&cp, spent), view, second_order, progress)?;
     summary.reconstruction_seconds = r.image.seconds;
     summary.reconstruction_rays = r.image.rays;
@@ -265,10 +295,10 @@ pub fn run_cached(
     if records.records_in.is_none() {
         img.seconds += placement.seconds;
         img.rays += placement.rays;
-    }
-    if let Some(s) = &surfaces {
-        img.seconds += s.seconds;
-        img.rays += s.rays;
+        if let Some(s) = &surfaces {
+            img.seconds += s.seconds;
+            img.rays += s.rays;
+        }
     }
     Ok((Some(img), summary))
 }

@@ -6,12 +6,15 @@
 //! JSON: a header naming what the records are valid for (a stable hash of the scene
 //! description, the method, ε, the image's size, samples per pixel, seed and march
 //! step: the query points placement covered) and the records (position, value,
-//! gradient and Hessian per channel, extent axes and radii, rays). Floats are written
-//! in their shortest exact form and read back exactly. Loading checks the header
-//! against the render that wants to use it and every record's validity, and names
-//! the file and the JSON path of whatever is wrong.
+//! gradient and Hessian per channel, extent axes and radii, rays); with a surface
+//! cache (`--surface-cache ours`), its records too, each with its normal, placed at
+//! the first surfaces of the same camera samples. Floats are written in their
+//! shortest exact form and read back exactly. Loading checks the header against the
+//! render that wants to use it and every record's validity, and names the file and
+//! the JSON path of whatever is wrong.
 
 use super::cached::{CachedRenderParams, Placement, RadianceCache};
+use super::cached_params::SurfaceCache;
 use super::scene::Scene;
 use crate::core::cache::Record;
 use crate::core::metric::{CacheMethod, Extent};
@@ -113,6 +116,90 @@ pub struct RecordsFile {
     pub placement_rays: u64,
     pub placement_seconds: f64,
     pub records: Vec<StoredRecord>,
+    /// The surface cache placed beside the records, when the render had one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surfaces: Option<StoredSurfaces>,
+}
+
+/// A surface cache as stored: its placement's numbers and its records.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StoredSurfaces {
+    pub eps: f64,
+    pub query_points: u64,
+    pub rays: u64,
+    pub seconds: f64,
+    pub records: Vec<StoredSurfaceRecord>,
+}
+
+/// A surface record: its irradiance record and the unit normal of its side.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StoredSurfaceRecord {
+    pub record: StoredRecord,
+    pub normal: [f64; 3],
+}
+
+/// A surface cache read from a file, before its records' occluders are listed
+/// ([`Loaded::surface_cache`]).
+pub struct LoadedSurfaces {
+    pub cache: RadianceCache,
+    pub normals: Vec<DVec3>,
+}
+
+/// A parsed and checked records file.
+pub struct Loaded {
+    pub file: RecordsFile,
+    pub cache: RadianceCache,
+    pub surfaces: Option<LoadedSurfaces>,
+}
+
+impl Loaded {
+    /// The surface cache, ready to serve `scene` (the occluders near each record
+    /// listed as placement lists them), when the file holds one.
+    pub fn surface_cache(&self, scene: &Scene) -> Option<SurfaceCache> {
+        let (stored, loaded) = (self.file.surfaces.as_ref()?, self.surfaces.as_ref()?);
+        Some(SurfaceCache {
+            near: crate::pipeline::sight::near_table(scene, &loaded.cache),
+            cache: loaded.cache.clone(),
+            normals: loaded.normals.clone(),
+            eps: stored.eps,
+            query_points: stored.query_points,
+            rays: stored.rays,
+            seconds: stored.seconds,
+        })
+    }
+}
+
+fn stored(r: &Record<D3, TaylorRgb<D3>>) -> StoredRecord {
+    StoredRecord {
+        position: r.position.to_array(),
+        value: r.value.channels.map(|c| {
+            let mut a = [0.0; 13];
+            a[0] = c.value;
+            a[1..4].copy_from_slice(&c.grad.to_array());
+            a[4..].copy_from_slice(&c.hess.to_cols_array());
+            a
+        }),
+        axes: r.extent.axes.to_cols_array_2d(),
+        radii: r.extent.radii.to_array(),
+        rays: r.cost_rays,
+    }
+}
+
+fn record_of(r: &StoredRecord) -> Record<D3, TaylorRgb<D3>> {
+    let channels = r
+        .value
+        .map(|a| Taylor2::<D3>::new(a[0], DVec3::from_slice(&a[1..4]), DMat3::from_cols_slice(&a[4..])));
+    Record {
+        position: DVec3::from_array(r.position),
+        value: TaylorRgb { channels },
+        extent: Extent::<D3> {
+            axes: DMat3::from_cols_array_2d(&r.axes),
+            radii: DVec3::from_array(r.radii),
+        },
+        cost_rays: r.rays,
+    }
 }
 
 /// Stable hash of what a scene is (its parsed description, not the file's bytes).
@@ -122,24 +209,31 @@ pub fn scene_hash(scene: &Scene) -> String {
 }
 
 impl RecordsFile {
-    pub fn from_placement(scene: &Scene, params: &CachedRenderParams, method: CacheMethod, p: &Placement) -> Self {
-        let records = p.caches[0]
-            .records()
-            .iter()
-            .map(|r| StoredRecord {
-                position: r.position.to_array(),
-                value: r.value.channels.map(|c| {
-                    let mut a = [0.0; 13];
-                    a[0] = c.value;
-                    a[1..4].copy_from_slice(&c.grad.to_array());
-                    a[4..].copy_from_slice(&c.hess.to_cols_array());
-                    a
-                }),
-                axes: r.extent.axes.to_cols_array_2d(),
-                radii: r.extent.radii.to_array(),
-                rays: r.cost_rays,
-            })
-            .collect();
+    /// The file of a placement and, when the render has one, its surface cache.
+    pub fn from_placement(
+        scene: &Scene,
+        params: &CachedRenderParams,
+        method: CacheMethod,
+        p: &Placement,
+        surfaces: Option<&SurfaceCache>,
+    ) -> Self {
+        let records = p.caches[0].records().iter().map(stored).collect();
+        let surfaces = surfaces.map(|s| StoredSurfaces {
+            eps: s.eps,
+            query_points: s.query_points,
+            rays: s.rays,
+            seconds: s.seconds,
+            records: s
+                .cache
+                .records()
+                .iter()
+                .zip(&s.normals)
+                .map(|(r, n)| StoredSurfaceRecord {
+                    record: stored(r),
+                    normal: n.to_array(),
+                })
+                .collect(),
+        });
         RecordsFile {
             format: FORMAT.into(),
             valid_for: ValidFor::of(scene, params),
@@ -149,11 +243,12 @@ impl RecordsFile {
             placement_rays: p.rays,
             placement_seconds: p.seconds,
             records,
+            surfaces,
         }
     }
 
     /// Parse and check the records (not yet against a render: see [`ValidFor::mismatch`]).
-    pub fn parse(text: &str, file: &str) -> Result<(RecordsFile, RadianceCache), String> {
+    pub fn parse(text: &str, file: &str) -> Result<Loaded, String> {
         let de = &mut serde_json::Deserializer::from_str(text);
         let f: RecordsFile =
             serde_path_to_error::deserialize(de).map_err(|e| format!("{file}: at `{}`: {}", e.path(), e.inner()))?;
@@ -164,34 +259,79 @@ impl RecordsFile {
             ));
         }
         check_header(&f).map_err(|(path, why)| format!("{file}: at `{path}`: {why}"))?;
-        let mut cache = RadianceCache::new();
-        for (i, r) in f.records.iter().enumerate() {
-            check_record(r).map_err(|(path, why)| format!("{file}: at `records[{i}].{path}`: {why}"))?;
-            let channels = r
-                .value
-                .map(|a| Taylor2::<D3>::new(a[0], DVec3::from_slice(&a[1..4]), DMat3::from_cols_slice(&a[4..])));
-            let record = Record {
-                position: DVec3::from_array(r.position),
-                value: TaylorRgb { channels },
-                extent: Extent::<D3> {
-                    axes: DMat3::from_cols_array_2d(&r.axes),
-                    radii: DVec3::from_array(r.radii),
-                },
-                cost_rays: r.rays,
-            };
-            cache
-                .insert(record)
-                .map_err(|e| format!("{file}: at `records[{i}]`: {e}"))?;
-        }
-        Ok((f, cache))
+        let cache = cache_of(f.records.iter(), |i| format!("records[{i}]"), file)?;
+        let surfaces = match &f.surfaces {
+            None => None,
+            Some(s) => {
+                check_surfaces(s).map_err(|(path, why)| format!("{file}: at `surfaces.{path}`: {why}"))?;
+                Some(LoadedSurfaces {
+                    cache: cache_of(
+                        s.records.iter().map(|r| &r.record),
+                        |i| format!("surfaces.records[{i}].record"),
+                        file,
+                    )?,
+                    normals: s.records.iter().map(|r| DVec3::from_array(r.normal)).collect(),
+                })
+            }
+        };
+        Ok(Loaded {
+            file: f,
+            cache,
+            surfaces,
+        })
     }
 
     /// Read and check a records file; errors name the file and the JSON path.
-    pub fn load(path: &Path) -> Result<(RecordsFile, RadianceCache), String> {
+    pub fn load(path: &Path) -> Result<Loaded, String> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: {e}"))?;
         Self::parse(&text, &file)
     }
+}
+
+/// The cache of checked `records` (`at(i)`: record i's JSON path, for errors).
+fn cache_of<'a>(
+    records: impl Iterator<Item = &'a StoredRecord>,
+    at: impl Fn(usize) -> String,
+    file: &str,
+) -> Result<RadianceCache, String> {
+    let mut cache = RadianceCache::new();
+    for (i, r) in records.enumerate() {
+        check_record(r).map_err(|(path, why)| format!("{file}: at `{}.{path}`: {why}", at(i)))?;
+        cache
+            .insert(record_of(r))
+            .map_err(|e| format!("{file}: at `{}`: {e}", at(i)))?;
+    }
+    Ok(cache)
+}
+
+/// The surface cache's numbers and normals are in range (a problem: JSON path
+/// within `surfaces`, why); its records are checked as the medium's.
+fn check_surfaces(s: &StoredSurfaces) -> Result<(), (String, String)> {
+    let (lo, hi) = crate::limits::EPS;
+    if !(s.eps.is_finite() && (lo..=hi).contains(&s.eps)) {
+        return Err((
+            "eps".into(),
+            format!("must lie between {lo:e} and {hi:e}, got {}", s.eps),
+        ));
+    }
+    if !(s.seconds.is_finite() && s.seconds >= 0.0) {
+        return Err((
+            "seconds".into(),
+            format!("must be a finite duration, got {}", s.seconds),
+        ));
+    }
+    for (i, r) in s.records.iter().enumerate() {
+        let n = DVec3::from_array(r.normal);
+        // Unit to well within what the serving test (cos ≥ 0.95) can tell apart.
+        if !(n.is_finite() && (n.length() - 1.0).abs() <= 1e-9) {
+            return Err((
+                format!("records[{i}].normal"),
+                format!("must be a unit vector, got {:?}", r.normal),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Largest |value| a record may carry, and may reach when extrapolated across its
