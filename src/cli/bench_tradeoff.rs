@@ -53,6 +53,8 @@ struct Report<'a> {
     params: &'a FieldParams,
     rays_per_cache: usize,
     per_part: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    direct_samples: Option<u32>,
     reference: &'a ReferenceInfo,
     points: &'a [Point],
     /// Each method's time to 3%, 1% and 0.3% relative RMSE, and the ratios to ours.
@@ -118,6 +120,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
         params: &fp,
         rays_per_cache: a.cache.rays,
         per_part: a.cache.per_part,
+        direct_samples: a.cache.direct_samples,
         reference: &ref_info,
         points: &points,
         targets: &targets,

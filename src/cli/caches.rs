@@ -46,6 +46,12 @@ pub struct CacheArgs {
     /// Second-order interpolation (ours).
     #[arg(long)]
     pub second_order: bool,
+    /// Sample the light arriving straight from the lights (emitters, sky, delta
+    /// lights) at every pixel with this many samples (NEE and a phase-sampled ray,
+    /// MIS), and cache only the rest: the records leave it out. Default: only delta
+    /// lights per pixel, the rest cached (the paper's split).
+    #[arg(long)]
+    pub direct_samples: Option<u32>,
     /// Resolution WxH (default: half the scene's render resolution).
     #[arg(long, value_parser = parse_res)]
     pub res: Option<[u32; 2]>,
@@ -93,6 +99,7 @@ pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> C
     cs.probe.grading = a.grading;
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
+    cs.direct_samples = a.direct_samples;
     cs
 }
 
@@ -120,6 +127,8 @@ struct Summary<'a> {
     rays_per_cache: usize,
     per_part: bool,
     second_order: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    direct_samples: Option<u32>,
     run: &'a MethodRun,
     reference: &'a ReferenceInfo,
 }
@@ -159,6 +168,9 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
     check_count("--steps", a.steps as u64, 4096)?;
     check_range("--grading", a.grading, limits::GRADING)?;
     check_spp("--ref-spp", a.ref_spp, limits::MAX_SPP)?;
+    if let Some(n) = a.direct_samples {
+        check_spp("--direct-samples", n, limits::MAX_SPP)?;
+    }
     ensure_memory(fp.width * fp.height, CACHES_BYTES_PER_PIXEL, "the field")
 }
 
@@ -208,6 +220,7 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         params: &fp,
         rays_per_cache: a.cache.rays,
         per_part: a.cache.per_part,
+        direct_samples: a.cache.direct_samples,
         second_order: a.cache.second_order,
         run: &run,
         reference: &ref_info,

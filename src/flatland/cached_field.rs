@@ -6,6 +6,8 @@
 //! The direct part (delta lights) is singular at shadow and beam edges and cheap:
 //! it is evaluated per pixel, never cached (theory.md §2). The cached quantity is
 //! single + multiple scattering, in one cache, or one cache per part (`per_part`).
+//! With `direct_samples`, all light arriving straight from the lights (emitters too)
+//! is sampled per pixel and the records hold only the rest (a field of all parts).
 
 use super::field::{Field, FieldParams};
 use super::lights::Lobe;
@@ -16,6 +18,7 @@ use crate::core::color::Rgb;
 pub use crate::core::metric::CacheMethod;
 use crate::core::rng::Sampler;
 use crate::core::space::D2;
+use crate::pipeline::path::direct_at;
 use crate::pipeline::placement::{
     CountError, Placement, QueryPoint, QuerySource, interpolate, place, place_with_count,
 };
@@ -146,15 +149,21 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                     let Some(m) = scene.medium_at(x) else {
                         return (Rgb::ZERO, false, true);
                     };
-                    let direct = if matches!(fp.part, Part::All | Part::Direct) {
-                        let lobe = Lobe::Phase {
-                            phase: m.phase,
-                            travel: -omega_o,
-                        };
-                        let mut s = Sampler::new(cs.seed, (j * w + i) as u64);
-                        scene.direct_part(x, &lobe, &mut s, &mut rays) * m.sigma_s
-                    } else {
-                        Rgb::ZERO
+                    let lobe = Lobe::Phase {
+                        phase: m.phase,
+                        travel: -omega_o,
+                    };
+                    let mut s = Sampler::new(cs.seed, (j * w + i) as u64);
+                    let direct = match (fp.part, cs.direct_samples) {
+                        (Part::All, Some(n)) => {
+                            let n = n.max(1);
+                            let sum = (0..n).fold(Rgb::ZERO, |acc, _| {
+                                acc + direct_at(scene, x, &lobe, None, &mut s, &mut rays)
+                            });
+                            sum * m.sigma_s / n as f64
+                        }
+                        (Part::All | Part::Direct, _) => scene.direct_part(x, &lobe, &mut s, &mut rays) * m.sigma_s,
+                        _ => Rgb::ZERO,
                     };
                     let cached: Vec<Option<Rgb>> = p
                         .caches

@@ -64,6 +64,12 @@ pub struct ProbeSettings {
     /// seen from ([`ProbeRay::slopes`]; the aware derivatives use it, the unaware
     /// ones do not). No extra rays: the light samples and the path are reweighted.
     pub slopes: bool,
+    /// Count the light arriving at a medium point straight from emitters, the sky
+    /// and delta lights. False when the caller estimates that light itself at every
+    /// point it serves ([`super::record::CacheSettings::direct_samples`]): then the
+    /// light field holds only light that was reflected or scattered on its way.
+    /// (A surface receiver says this itself, [`SurfaceReceiver::emitted`].)
+    pub emitted: bool,
     pub settings: Settings,
 }
 
@@ -84,6 +90,7 @@ impl ProbeSettings {
             far_factor: 4.0,
             jitter: 1.0,
             slopes: true,
+            emitted: true,
             settings: Settings::default(),
         }
     }
@@ -408,7 +415,7 @@ fn trace_field<W: World>(
 ) -> Result<LightField<W::S>, Cancelled> {
     let start = std::time::Instant::now();
     let skip = surface.map(|r| r.prim);
-    let emitted = surface.is_none_or(|r| r.emitted);
+    let emitted = surface.map_or(ps.emitted, |r| r.emitted);
     let medium = world.medium();
     let at_x = world.medium_at(x);
     let sigma_t_x = at_x.map_or(Rgb::ZERO, |m| m.sigma_t);

@@ -49,6 +49,15 @@ pub struct CacheSettings {
     /// when not asked for: a null there reads as a non-finite number.)
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moment_bands: Option<usize>,
+    /// Estimate the light arriving straight from the lights (emitters, sky, delta
+    /// lights) at every point served, with this many samples of
+    /// [`super::path::direct_at`] (NEE and a phase-sampled ray, MIS), and cache only
+    /// the rest: the records' light fields leave it out ([`ProbeSettings::emitted`]).
+    /// Its shadow edges and the peak around a light are where records extrapolate
+    /// worst; per point they cost a few rays. None: the paper's split (only delta
+    /// lights per point).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direct_samples: Option<u32>,
 }
 
 impl CacheSettings {
@@ -69,6 +78,7 @@ impl CacheSettings {
             hessian_floor: 0.01,
             seed: 1,
             moment_bands: None,
+            direct_samples: None,
         }
     }
 
@@ -150,6 +160,7 @@ pub fn compute_record<W: World>(
     // Jarosz et al. 2008 hold each sample's light fixed: no slopes to pay for.
     let probe = ProbeSettings {
         slopes: cs.probe.slopes && cs.method == CacheMethod::Ours,
+        emitted: cs.probe.emitted && cs.direct_samples.is_none(),
         ..cs.probe
     };
     let mut lf = capture(world, x, out, &probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;

@@ -80,6 +80,8 @@ pub fn surface_settings(cs: &CacheSettings, eps: f64) -> CacheSettings {
         method: crate::core::metric::CacheMethod::Ours,
         eps,
         moment_bands: None,
+        // Surface records say for themselves what they leave out (their receiver).
+        direct_samples: None,
         ..cs.clone()
     };
     s.probe.rays = (cs.probe.rays / 2).max(16);
