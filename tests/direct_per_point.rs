@@ -17,6 +17,7 @@ use volcache::pipeline::probe::Outgoing;
 use volcache::pipeline::record::compute_record;
 use volcache::pipeline::world::World;
 use volcache::progress::Progress;
+use volcache::volume::cached::RecordMemo as RecordMemo3;
 
 const SCENE: &str = r#"{
   "domain": {"min": [-1, -1], "max": [1, 1]},
@@ -143,4 +144,116 @@ fn sampling_the_straight_light_per_pixel_beats_caching_it_at_a_low_count() {
         assert!(es.rmse < 0.8 * ec.rmse, "seed {seed}: {} vs {}", es.rmse, ec.rmse);
         assert!((ms - mr).abs() < 0.03 * mr, "seed {seed}: mean {ms} vs {mr}");
     }
+}
+
+/// 3D, a room of our own: a tilted two-sided lamp over a floor, a box between them
+/// casting a penumbra into a box of fog (g = 0.5), a point light. What the records
+/// leave out is what the march points add, as in 2D, to the light field's own
+/// angular error: at 16384 directions the worst point of record seeds 9, 10 and 12
+/// came to 0.65 of the bound (at 2048 a lamp filling 0.36 sr was 6% low for all
+/// three seeds, the Fibonacci sets' shared discretisation, gone at 16384).
+const ROOM: &str = r#"{
+  "camera": {"position": [0, 1.2, 3.5], "look_at": [0, 0.7, 0], "fov_deg": 50},
+  "shapes": [
+    {"quad": {"origin": [-2, 0, -2], "u": [0, 0, 4], "v": [4, 0, 0]}, "reflectance": 0.6},
+    {"box": {"min": [-0.2, 0.5, -0.3], "max": [0.3, 0.7, 0.2]}, "reflectance": 0.4},
+    {"quad": {"origin": [-0.6, 1.5, -0.5], "u": [0.7, 0, 0], "v": [0, -0.2, 0.6]},
+     "reflectance": 0, "emission": [20, 18, 14], "two_sided": true}
+  ],
+  "lights": [{"point": {"position": [1.0, 0.4, 0.5], "intensity": 1.5}}],
+  "medium": {"sigma_a": 0.05, "sigma_s": 0.8, "g": 0.5, "region": {"box": {"min": [-1.5, 0, -1.5], "max": [1.5, 1.8, 1.5]}}},
+  "render": {"resolution": [32, 24], "spp": 4, "seed": 5, "max_depth": 12}
+}"#;
+
+#[test]
+fn records_leave_out_what_the_march_points_add_3d() {
+    use glam::DVec3;
+    use volcache::volume::lights::Lobe as Lobe3;
+    let s = volcache::volume::scene::Scene::from_json(ROOM, "<room>", std::path::Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let omega_o = DVec3::new(0.3, -0.4, 0.866).normalize();
+    let settings = |ds| {
+        let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, Default::default());
+        cs.probe.rays = 16384;
+        cs.probe.steps = 4;
+        cs.seed = 9;
+        cs.direct_samples = ds;
+        cs
+    };
+    let points = [
+        DVec3::new(0.0, 1.0, 0.0),   // between lamp and box, in light
+        DVec3::new(0.05, 0.35, 0.0), // under the box: shadow and penumbra
+        DVec3::new(0.6, 0.3, -0.4),  // near the penumbra's edge
+        DVec3::new(-0.5, 0.4, -0.6), // below the lamp, facing it
+    ];
+    let progress = Progress::new();
+    let mut worst: f64 = 0.0;
+    for (k, &x) in points.iter().enumerate() {
+        let value = |cs: &CacheSettings| {
+            let r = compute_record(&s, x, Outgoing::Direction(omega_o), cs, k as u64, &progress).unwrap();
+            luminance((r.parts.single + r.parts.multiple).value())
+        };
+        let left_out = value(&settings(None)) - value(&settings(Some(1)));
+        let m = s.medium_at(x).unwrap();
+        let lobe = Lobe3::Phase {
+            phase: m.phase,
+            travel: -omega_o,
+        };
+        let (mut sampler, mut rays) = (Sampler::new(78, k as u64), 0);
+        let n = 40_000;
+        let mut sum = Rgb::ZERO;
+        for _ in 0..n {
+            sum += direct_at(&s, x, &lobe, None, &mut sampler, &mut rays);
+        }
+        let delta = s.direct_part(x, &lobe, &mut sampler, &mut rays);
+        let straight = luminance((sum / n as f64 - delta) * m.sigma_s);
+        let miss = (left_out - straight).abs();
+        println!("{x:?}: records leave out {left_out:.5}, points add {straight:.5} (difference {miss:.2e})");
+        worst = worst.max(miss / (0.01 * straight + 0.003));
+    }
+    assert!(worst < 1.0, "worst {worst}");
+}
+
+/// 3D images of the room at 30 records: the medium part against a march reference
+/// on the same camera samples (two independent 16-path references, their noise
+/// taken out), with the straight light sampled at every march point (8 samples)
+/// and with it cached: per-point sampling is better for every record seed, and by
+/// about 0.6× on average.
+#[test]
+fn per_point_straight_light_in_3d_images() {
+    use volcache::volume::cached::{CachedRenderParams, march_reference, render_cached};
+    let s = volcache::volume::scene::Scene::from_json(ROOM, "<room>", std::path::Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut p = CachedRenderParams::from_scene(&s);
+    (p.image.width, p.image.height, p.image.spp) = (24, 18, 2);
+    p.march_step = s.scale / 48.0;
+    p.surface_paths = 1;
+    let lum = |v: &[Rgb]| -> Vec<f64> { v.iter().map(|c| luminance(*c)).collect() };
+    let rms =
+        |a: &[f64], b: &[f64]| (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
+    let r1 = lum(&march_reference(&s, &p, 32, 1, &Progress::new()).unwrap().image.medium);
+    let r2 = lum(&march_reference(&s, &p, 32, 2, &Progress::new()).unwrap().image.medium);
+    let reference: Vec<f64> = r1.iter().zip(&r2).map(|(a, b)| 0.5 * (a + b)).collect();
+    let noise2 = rms(&r1, &r2).powi(2) / 4.0;
+    let mut ratios = Vec::new();
+    for seed in 1..=4 {
+        let error = |ds| {
+            let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, p.image.settings);
+            (cs.probe.rays, cs.probe.steps, cs.seed, cs.direct_samples) = (512, 8, seed, ds);
+            let r = render_cached(&s, &p, &cs, Some(30), &mut RecordMemo3::new(), &Progress::new())
+                .unwrap_or_else(|e| panic!("{e}"));
+            let e2 = rms(&lum(&r.reconstruction.image.medium), &reference).powi(2);
+            ((e2 - noise2).max(0.0).sqrt(), r.placement.record_count())
+        };
+        let ((cached, kc), (sampled, ks)) = (error(None), error(Some(8)));
+        println!(
+            "seed {seed}: cached {kc} records {cached:.4e}, per point {ks} records {sampled:.4e} (reference noise {:.2e})",
+            noise2.sqrt()
+        );
+        ratios.push(sampled / cached);
+    }
+    // Measured (seeds 1-6): 0.68, 0.45, 0.77, 0.44, 0.37, 0.62; the per-point
+    // estimate's own noise (8 samples per point, 2 camera samples) is part of it.
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    assert!(mean < 0.75 && ratios.iter().all(|&r| r < 0.95), "{ratios:?}");
 }

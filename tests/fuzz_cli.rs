@@ -166,6 +166,9 @@ fn command(s: &mut Sampler, three_d: bool) -> (Vec<String>, Vec<&'static str>) {
                 if s.next_f64() < 0.2 {
                     add(&["--per-part", "--second-order"]);
                 }
+                if s.next_f64() < 0.2 {
+                    add(&["--direct-samples", opt(s, &["1", "3"], &["0"])]);
+                }
                 let out = pick(s, &["o/c", "o/c", "o/c", "."]);
                 add(&["--out", out, "--ref-cache", "o/ref"]);
                 outputs.extend([out, "o/ref"]);

@@ -258,6 +258,16 @@ fn bad_records_files_are_clear_errors() {
     let mut v = good.clone();
     v["format"] = serde_json::json!("something else");
     check(v, "format");
+    // Records that leave the straight light out say so, with a count in range.
+    let mut v = good.clone();
+    v["direct_samples"] = serde_json::json!(0);
+    check(v, "direct_samples");
+    let mut v = good.clone();
+    v["direct_samples"] = serde_json::json!(3);
+    let Ok(loaded) = RecordsFile::parse(&v.to_string(), "r.json") else {
+        panic!("refused")
+    };
+    assert_eq!(loaded.file.direct_samples, Some(3));
     let Err(err) = RecordsFile::parse("{not json", "r.json") else {
         panic!("accepted")
     };

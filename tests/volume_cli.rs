@@ -172,6 +172,10 @@ fn bad_input_is_a_clear_error() {
         "--image-march-step",
     );
     fails_with(&["render3d", s, "--method", "ours", "--eps", "nan"], "--eps");
+    fails_with(
+        &["render3d", s, "--method", "ours", "--direct-samples", "0"],
+        "--direct-samples",
+    );
     fails_with(&["render3d", s, "--res", "10x4", "--tile", "0/5"], "at most 4 tiles");
     fails_with(&["render3d", s, "--tile", "3/3"], "0 <= i < n");
     fails_with(
@@ -284,6 +288,19 @@ fn tiles_sharing_records_merge_into_the_full_render() {
     ]));
     assert!(
         err.contains("records.json") && err.contains("no surface records"),
+        "{err}"
+    );
+    // Records that hold the straight light cannot have it sampled per point too.
+    let err = failure(volcache().args(base).args([
+        "--direct-samples",
+        "4",
+        "--records-in",
+        &path("records.json"),
+        "--out",
+        &path("bad"),
+    ]));
+    assert!(
+        err.contains("records.json") && err.contains("--direct-samples"),
         "{err}"
     );
     assert!(!d.join("bad").exists());

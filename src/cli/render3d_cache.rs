@@ -55,6 +55,13 @@ pub struct Cache3dArgs {
     /// Second-order interpolation (ours; also of the surface cache).
     #[arg(long)]
     pub second_order: bool,
+    /// Sample the light arriving straight from the lights (emitters, sky, sun,
+    /// delta lights) at every march point with this many samples (NEE and a
+    /// phase-sampled ray, MIS), and cache only the rest: the records leave it out.
+    /// Default: only delta lights and suns per point, the rest cached (the paper's
+    /// split).
+    #[arg(long)]
+    pub direct_samples: Option<u32>,
     /// Light reflected by the first surface: path traced per camera sample
     /// (`none`), or its indirect part from an occlusion-aware second-order
     /// irradiance cache on the surfaces, direct light sampled per camera sample
@@ -112,6 +119,9 @@ impl Cache3dArgs {
             "--grading must be between {lo} and {hi}"
         );
         anyhow::ensure!((1..=1024).contains(&self.paths), "--paths must be between 1 and 1024");
+        if let Some(n) = self.direct_samples {
+            anyhow::ensure!((1..=4096).contains(&n), "--direct-samples must be between 1 and 4096");
+        }
         anyhow::ensure!(
             (1..=1024).contains(&self.surface_paths),
             "--surface-paths must be between 1 and 1024"
@@ -157,6 +167,7 @@ impl Cache3dArgs {
         cs.probe.grading = self.grading;
         cs.probe.paths = self.paths;
         cs.second_order = self.second_order;
+        cs.direct_samples = self.direct_samples;
         cs.seed = self.cache_seed;
         Ok((cs, cp))
     }
@@ -185,6 +196,21 @@ fn file_surfaces(
         );
     }
     Ok(surfaces)
+}
+
+/// The straight light's samples per point for records read from a file: none if
+/// its records hold that light (then asking for samples is an error: they would
+/// count it twice), else the file's count or the one asked for.
+fn file_direct_samples(file: Option<u32>, asked: Option<u32>, path: &std::path::Path) -> anyhow::Result<Option<u32>> {
+    match (file, asked) {
+        (None, Some(_)) => anyhow::bail!(
+            "--records-in {}: its records hold the light straight from the lights, so --direct-samples \
+             cannot apply (place them with --direct-samples to sample that light per point)",
+            path.display()
+        ),
+        (Some(n), asked) => Ok(Some(asked.unwrap_or(n))),
+        (None, None) => Ok(None),
+    }
 }
 
 /// Place (or load) and reconstruct (`place_spp`: the camera samples placement
@@ -229,6 +255,7 @@ pub fn run_cached(
                 query_points: loaded.file.query_points,
                 rays: loaded.file.placement_rays,
                 seconds: loaded.file.placement_seconds,
+                direct_samples: file_direct_samples(loaded.file.direct_samples, a.direct_samples, path)?,
             }
         }
         None => {

@@ -154,7 +154,7 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                         travel: -omega_o,
                     };
                     let mut s = Sampler::new(cs.seed, (j * w + i) as u64);
-                    let direct = match (fp.part, cs.direct_samples) {
+                    let direct = match (fp.part, p.direct_samples) {
                         (Part::All, Some(n)) => {
                             let n = n.max(1);
                             let sum = (0..n).fold(Rgb::ZERO, |acc, _| {

@@ -76,6 +76,10 @@ pub struct Placement<S: Dim> {
     pub rays: u64,
     /// Coverage checks plus the capture time of every record used.
     pub seconds: f64,
+    /// The records leave out the light arriving straight from the lights, which
+    /// is sampled this many times at every point served
+    /// ([`CacheSettings::direct_samples`]).
+    pub direct_samples: Option<u32>,
 }
 
 impl<S: Dim> Placement<S> {
@@ -190,6 +194,7 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
         query_points,
         rays,
         seconds: start.elapsed().as_secs_f64() - capture_wall + records_seconds,
+        direct_samples: cs.direct_samples,
     })
 }
 

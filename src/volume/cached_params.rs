@@ -83,6 +83,9 @@ pub struct CacheView<'a> {
     pub moments: Option<&'a [RecordMoments<D3>]>,
     /// A surface cache, if surfaces are read from one.
     pub surfaces: Option<&'a SurfaceCache>,
+    /// The records leave out the light arriving straight from the lights: sample it
+    /// this many times at every march point ([`Placement::direct_samples`]).
+    pub direct_samples: Option<u32>,
 }
 
 impl<'a> CacheView<'a> {
@@ -92,6 +95,7 @@ impl<'a> CacheView<'a> {
             cache,
             moments: None,
             surfaces: None,
+            direct_samples: None,
         }
     }
 
@@ -103,6 +107,7 @@ impl<'a> CacheView<'a> {
             cache: &placement.caches[0],
             moments: (complete && !table.is_empty()).then_some(table.as_slice()),
             surfaces: None,
+            direct_samples: placement.direct_samples,
         }
     }
 

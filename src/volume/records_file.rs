@@ -8,7 +8,8 @@
 //! step: the query points placement covered) and the records (position, value,
 //! gradient and Hessian per channel, extent axes and radii, rays); with a surface
 //! cache (`--surface-cache ours`), its records too, each with its normal, placed at
-//! the first surfaces of the same camera samples. Floats are written in their
+//! the first surfaces of the same camera samples; with `--direct-samples`, that the
+//! records leave the straight light out. Floats are written in their
 //! shortest exact form and read back exactly. Loading checks the header against the
 //! render that wants to use it and every record's validity, and names the file and
 //! the JSON path of whatever is wrong.
@@ -116,6 +117,10 @@ pub struct RecordsFile {
     pub placement_rays: u64,
     pub placement_seconds: f64,
     pub records: Vec<StoredRecord>,
+    /// The records leave out the light straight from the lights, sampled this many
+    /// times per point instead (`CacheSettings::direct_samples`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direct_samples: Option<u32>,
     /// The surface cache placed beside the records, when the render had one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surfaces: Option<StoredSurfaces>,
@@ -243,6 +248,7 @@ impl RecordsFile {
             placement_rays: p.rays,
             placement_seconds: p.seconds,
             records,
+            direct_samples: p.direct_samples,
             surfaces,
         }
     }
@@ -359,6 +365,9 @@ fn check_header(f: &RecordsFile) -> Result<(), (String, String)> {
             "eps".into(),
             format!("must lie between {lo:e} and {hi:e}, got {}", f.eps),
         ));
+    }
+    if let Some(n) = f.direct_samples.filter(|n| !(1..=4096).contains(n)) {
+        return Err(("direct_samples".into(), format!("must be between 1 and 4096, got {n}")));
     }
     if !(f.placement_seconds.is_finite() && f.placement_seconds >= 0.0) {
         return Err((
