@@ -184,6 +184,43 @@ fn bad_input_is_a_clear_error() {
     );
 }
 
+/// Renders the `n` tiles of a cached render with `run` (its extra options) from
+/// `d/records.json` into `d/tiles`, merges them into `d/merged` and asserts that
+/// the image and its medium part equal `d/full`'s byte for byte. Returns the
+/// tiles' summaries.
+fn tiles_merge_into_the_full_render(d: &std::path::Path, stem: &str, n: usize, run: impl Fn(&[&str])) -> Vec<String> {
+    let path = |p: &str| d.join(p).display().to_string();
+    for i in 0..n {
+        let tile = format!("{i}/{n}");
+        run(&[
+            "--records-in",
+            &path("records.json"),
+            "--tile",
+            &tile,
+            "--out",
+            &path("tiles"),
+        ]);
+    }
+    let tiles: Vec<String> = (0..n)
+        .map(|i| path(&format!("tiles/{stem}_tile{i}of{n}.json")))
+        .collect();
+    let out = volcache()
+        .arg("merge3d")
+        .args(&tiles)
+        .args(["--out", &path("merged")])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for f in [format!("{stem}.exr"), format!("{stem}_medium.exr")] {
+        let (a, b) = (
+            std::fs::read(d.join("full").join(&f)).unwrap(),
+            std::fs::read(d.join("merged").join(&f)).unwrap(),
+        );
+        assert!(a == b, "{f}: merged tiles differ from the full render");
+    }
+    tiles
+}
+
 /// A cache method's render split into tiles, each reconstructing from the records a
 /// full render placed (`--records-out`), merges into the full render bit for bit;
 /// records placed for another image are refused, and the summary has the costs.
@@ -221,34 +258,7 @@ fn tiles_sharing_records_merge_into_the_full_render() {
         "--out",
         &path("full"),
     ]);
-    for i in 0..3 {
-        let tile = format!("{i}/3");
-        run(&[
-            "--records-in",
-            &path("records.json"),
-            "--tile",
-            &tile,
-            "--out",
-            &path("tiles"),
-        ]);
-    }
-    let tiles: Vec<String> = (0..3)
-        .map(|i| path(&format!("tiles/fog_box_ours_tile{i}of3.json")))
-        .collect();
-    let out = volcache()
-        .arg("merge3d")
-        .args(&tiles)
-        .args(["--out", &path("merged")])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    for f in ["fog_box_ours.exr", "fog_box_ours_medium.exr"] {
-        let (a, b) = (
-            std::fs::read(d.join("full").join(f)).unwrap(),
-            std::fs::read(d.join("merged").join(f)).unwrap(),
-        );
-        assert!(a == b, "{f}: merged tiles differ from the full render");
-    }
+    let tiles = tiles_merge_into_the_full_render(d, "fog_box_ours", 3, run);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("full/fog_box_ours.json")).unwrap()).unwrap();
     let records = json["cache"]["records"].as_u64().unwrap();
@@ -351,34 +361,7 @@ fn tiles_share_the_surface_cache_through_the_records_file() {
         serde_json::from_str(&std::fs::read_to_string(d.join("records.json")).unwrap()).unwrap();
     let surface_records = file["surfaces"]["records"].as_array().unwrap().len();
     assert!(surface_records > 3, "{surface_records} surface records");
-    for i in 0..2 {
-        let tile = format!("{i}/2");
-        ok(&[
-            "--records-in",
-            &path("records.json"),
-            "--tile",
-            &tile,
-            "--out",
-            &path("tiles"),
-        ]);
-    }
-    let tiles: Vec<String> = (0..2)
-        .map(|i| path(&format!("tiles/room_ours_tile{i}of2.json")))
-        .collect();
-    let out = volcache()
-        .arg("merge3d")
-        .args(&tiles)
-        .args(["--out", &path("merged")])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    for f in ["room_ours.exr", "room_ours_medium.exr"] {
-        let (a, b) = (
-            std::fs::read(d.join("full").join(f)).unwrap(),
-            std::fs::read(d.join("merged").join(f)).unwrap(),
-        );
-        assert!(a == b, "{f}: merged tiles differ from the full render");
-    }
+    tiles_merge_into_the_full_render(d, "room_ours", 2, ok);
     let read =
         |f: &str| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap() };
     let (full, merged) = (read("full/room_ours.json"), read("merged/room_ours.json"));
