@@ -18,7 +18,7 @@ use crate::core::color::Rgb;
 pub use crate::core::metric::CacheMethod;
 use crate::core::rng::Sampler;
 use crate::core::space::D2;
-use crate::pipeline::path::direct_at;
+use crate::pipeline::path::direct_mean;
 use crate::pipeline::placement::{
     CountError, Placement, QueryPoint, QuerySource, interpolate, place, place_with_count,
 };
@@ -155,13 +155,7 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                     };
                     let mut s = Sampler::new(cs.seed, (j * w + i) as u64);
                     let direct = match (fp.part, p.direct_samples) {
-                        (Part::All, Some(n)) => {
-                            let n = n.max(1);
-                            let sum = (0..n).fold(Rgb::ZERO, |acc, _| {
-                                acc + direct_at(scene, x, &lobe, None, &mut s, &mut rays)
-                            });
-                            sum * m.sigma_s / n as f64
-                        }
+                        (Part::All, Some(n)) => direct_mean(scene, x, (&lobe, m.sigma_s), n, &mut s, &mut rays),
                         (Part::All | Part::Direct, _) => scene.direct_part(x, &lobe, &mut s, &mut rays) * m.sigma_s,
                         _ => Rgb::ZERO,
                     };

@@ -389,6 +389,22 @@ pub fn direct_at<W: World>(
     l
 }
 
+/// `scale` × the mean of `n` (at least one) [`direct_at`] samples: the straight
+/// light a point adds (`scale` = σ_s) when its records leave it out
+/// (`CacheSettings::direct_samples`).
+pub fn direct_mean<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    (lobe, scale): (&Lobe<W::S>, Rgb),
+    n: u32,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Rgb {
+    let n = n.max(1);
+    let sum = (0..n).fold(Rgb::ZERO, |acc, _| acc + direct_at(world, x, lobe, None, s, rays));
+    sum * scale / n as f64
+}
+
 /// What to estimate at a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Query<S: Dim> {

@@ -18,7 +18,7 @@ use crate::core::color::Rgb;
 use crate::core::rng::{Sampler, mix64};
 use crate::core::space::D3;
 use crate::pipeline::moments::{MomentQuery, weights_towards};
-use crate::pipeline::path::{direct_at, radiance_leaving, sample_at};
+use crate::pipeline::path::{direct_mean, radiance_leaving, sample_at};
 use crate::pipeline::placement::{interpolate, interpolate_moments};
 use crate::pipeline::sight::near_table;
 use crate::pipeline::world::World;
@@ -64,11 +64,7 @@ pub fn reconstruct(
     march_image(scene, params, progress, surface, move |p, lobe, sigma_s, s, rays| {
         let direct = match view.direct_samples {
             // The records leave the straight light out: sampled here in full.
-            Some(n) => {
-                let n = n.max(1);
-                let sum = (0..n).fold(Rgb::ZERO, |acc, _| acc + direct_at(scene, p, lobe, None, s, rays));
-                sum * sigma_s / n as f64
-            }
+            Some(n) => direct_mean(scene, p, (lobe, sigma_s), n, s, rays),
             None => scene.direct_part(p, lobe, s, rays) * sigma_s,
         };
         let cached = match (view.moments, lobe) {
