@@ -382,6 +382,20 @@ fn params_follow_the_app_resolution_unless_set() {
         "volcache figure compare 'a b.json' --caches 150 --rays 512 --steps 16 --res 128x128 \
          --ref-spp 256 --seed 7 --out out/compare"
     );
+    // The straight light per pixel and the edge reach reach the settings and the
+    // command that reproduces the comparison.
+    let tuned = CompareParams {
+        direct_samples: Some(32),
+        edge_reach: Some(0.5),
+        ..p.clone()
+    };
+    let cs = tuned.cache_settings(CacheMethod::Ours, &fp);
+    assert_eq!((cs.direct_samples, cs.edge_reach), (Some(32), Some(0.5)));
+    assert_eq!(
+        compare_command(None, &fp, &tuned, "o"),
+        "volcache figure compare --caches 150 --rays 512 --steps 16 --direct-samples 32 --edge-reach 0.5 \
+         --res 128x128 --ref-spp 256 --seed 7 --out o"
+    );
 }
 
 #[test]
@@ -393,6 +407,7 @@ fn a_tiny_comparison_runs_both_methods() {
         steps: 2,
         res: Some([12, 12]),
         ref_spp: 4,
+        ..Default::default()
     };
     let key = CompareKey {
         revision: 0,
@@ -425,6 +440,7 @@ fn compare_state_runs_only_when_needed_and_restarts_on_change() {
         steps: 1,
         res: Some([8, 8]),
         ref_spp: 2,
+        ..Default::default()
     };
     wb.tick();
     assert_eq!(wb.compare_starts(), 0, "closed and no overlay: nothing");

@@ -169,6 +169,12 @@ fn command(s: &mut Sampler, three_d: bool) -> (Vec<String>, Vec<&'static str>) {
                 if s.next_f64() < 0.2 {
                     add(&["--direct-samples", opt(s, &["1", "3"], &["0"])]);
                 }
+                if s.next_f64() < 0.2 {
+                    add(&[&format!(
+                        "--edge-reach={}",
+                        opt(s, &["0.5", "0.01"], &["0", "nan", "-1", "1e9"])
+                    )]);
+                }
                 let out = pick(s, &["o/c", "o/c", "o/c", "."]);
                 add(&["--out", out, "--ref-cache", "o/ref"]);
                 outputs.extend([out, "o/ref"]);

@@ -176,6 +176,10 @@ fn bad_input_is_a_clear_error() {
         &["render3d", s, "--method", "ours", "--direct-samples", "0"],
         "--direct-samples",
     );
+    fails_with(
+        &["render3d", s, "--method", "ours", "--edge-reach", "nan"],
+        "--edge-reach",
+    );
     fails_with(&["render3d", s, "--res", "10x4", "--tile", "0/5"], "at most 4 tiles");
     fails_with(&["render3d", s, "--tile", "3/3"], "0 <= i < n");
     fails_with(

@@ -33,6 +33,12 @@ pub struct CompareParams {
     pub res: Option<[usize; 2]>,
     /// Samples per pixel of the reference (`--ref-spp`).
     pub ref_spp: u32,
+    /// The light straight from the lights sampled this many times per pixel, not
+    /// cached (`--direct-samples`).
+    pub direct_samples: Option<u32>,
+    /// Records reach no farther than this multiple of their distance to the
+    /// nearest edge they see (`--edge-reach`).
+    pub edge_reach: Option<f64>,
 }
 
 impl Default for CompareParams {
@@ -43,6 +49,8 @@ impl Default for CompareParams {
             steps: 16,
             res: None,
             ref_spp: 256,
+            direct_samples: None,
+            edge_reach: None,
         }
     }
 }
@@ -62,9 +70,14 @@ impl CompareParams {
     }
 
     /// The cache settings of `method` (as `volcache caches`' defaults with these
-    /// rays, steps and seed).
+    /// rays, steps, seed, straight-light samples and edge reach).
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
-        field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps)
+        let mut cs = field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps);
+        cs.direct_samples = self.direct_samples.map(|n| n.max(1));
+        cs.edge_reach = self
+            .edge_reach
+            .map(|k| k.clamp(crate::limits::EDGE_REACH.0, crate::limits::EDGE_REACH.1));
+        cs
     }
 
     /// The reference's field parameters (the seed of `figure compare`).
@@ -204,8 +217,13 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
 /// `volcache figure compare` reproducing the comparison (`scene`: None for the
 /// embedded default scene).
 pub fn compare_command(scene: Option<&str>, fp: &FieldParams, p: &CompareParams, out: &str) -> String {
+    let cs = p.cache_settings(CacheMethod::Ours, fp);
+    let direct = cs
+        .direct_samples
+        .map_or(String::new(), |n| format!(" --direct-samples {n}"));
+    let reach = cs.edge_reach.map_or(String::new(), |k| format!(" --edge-reach {k}"));
     format!(
-        "volcache figure compare{} --caches {} --rays {} --steps {} --res {}x{} --ref-spp {} --seed {} --out {}",
+        "volcache figure compare{} --caches {} --rays {} --steps {}{direct}{reach} --res {}x{} --ref-spp {} --seed {} --out {}",
         scene.map_or(String::new(), |s| format!(" {}", shell_quote(s))),
         p.caches.max(1),
         p.rays.max(3),

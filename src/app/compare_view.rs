@@ -116,6 +116,22 @@ impl Workbench {
             let l = ui.label("steps per ray");
             ui.add(DragValue::new(&mut p.steps).range(1..=1024)).labelled_by(l.id);
             ui.end_row();
+            let mut per_pixel = p.direct_samples.is_some();
+            ui.checkbox(&mut per_pixel, "straight light per pixel")
+                .on_hover_text("Sample the light arriving straight from the lights at every pixel and cache only the rest (--direct-samples)");
+            let mut n = p.direct_samples.unwrap_or(64);
+            ui.add_enabled(per_pixel, DragValue::new(&mut n).range(1..=4096))
+                .accessible_name("straight-light samples per pixel");
+            p.direct_samples = per_pixel.then_some(n);
+            ui.end_row();
+            let mut limited = p.edge_reach.is_some();
+            ui.checkbox(&mut limited, "reach ≤ edge distance ×")
+                .on_hover_text("Records reach no farther than this multiple of their distance to the nearest surface edge they see (--edge-reach)");
+            let mut k = p.edge_reach.unwrap_or(1.0);
+            ui.add_enabled(limited, DragValue::new(&mut k).range(0.01..=100.0).speed(0.05))
+                .accessible_name("edge reach");
+            p.edge_reach = limited.then_some(k);
+            ui.end_row();
             let l = ui.label("compare reference spp");
             ui.add(DragValue::new(&mut p.ref_spp).range(1..=1_000_000).speed(10.0))
                 .labelled_by(l.id);

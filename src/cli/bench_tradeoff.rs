@@ -55,6 +55,8 @@ struct Report<'a> {
     per_part: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     direct_samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    edge_reach: Option<f64>,
     reference: &'a ReferenceInfo,
     points: &'a [Point],
     /// Each method's time to 3%, 1% and 0.3% relative RMSE, and the ratios to ours.
@@ -121,6 +123,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
         rays_per_cache: a.cache.rays,
         per_part: a.cache.per_part,
         direct_samples: a.cache.direct_samples,
+        edge_reach: a.cache.edge_reach,
         reference: &ref_info,
         points: &points,
         targets: &targets,

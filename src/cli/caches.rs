@@ -52,6 +52,12 @@ pub struct CacheArgs {
     /// lights per pixel, the rest cached (the paper's split).
     #[arg(long)]
     pub direct_samples: Option<u32>,
+    /// Limit every record's radii to this multiple of its distance to the nearest
+    /// surface edge it sees (a segment's end, a triangle's silhouette edge), where
+    /// the light turns with the angle and no Taylor expansion reaches across.
+    /// Default: the paper's metric alone.
+    #[arg(long)]
+    pub edge_reach: Option<f64>,
     /// Resolution WxH (default: half the scene's render resolution).
     #[arg(long, value_parser = parse_res)]
     pub res: Option<[u32; 2]>,
@@ -100,6 +106,7 @@ pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> C
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
     cs.direct_samples = a.direct_samples;
+    cs.edge_reach = a.edge_reach;
     cs
 }
 
@@ -129,6 +136,8 @@ struct Summary<'a> {
     second_order: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     direct_samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    edge_reach: Option<f64>,
     run: &'a MethodRun,
     reference: &'a ReferenceInfo,
 }
@@ -170,6 +179,9 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
     check_spp("--ref-spp", a.ref_spp, limits::MAX_SPP)?;
     if let Some(n) = a.direct_samples {
         check_spp("--direct-samples", n, limits::MAX_SPP)?;
+    }
+    if let Some(k) = a.edge_reach {
+        check_range("--edge-reach", k, limits::EDGE_REACH)?;
     }
     ensure_memory(fp.width * fp.height, CACHES_BYTES_PER_PIXEL, "the field")
 }
@@ -221,6 +233,7 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         rays_per_cache: a.cache.rays,
         per_part: a.cache.per_part,
         direct_samples: a.cache.direct_samples,
+        edge_reach: a.cache.edge_reach,
         second_order: a.cache.second_order,
         run: &run,
         reference: &ref_info,

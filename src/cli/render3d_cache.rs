@@ -62,6 +62,12 @@ pub struct Cache3dArgs {
     /// split).
     #[arg(long)]
     pub direct_samples: Option<u32>,
+    /// Limit every record's radii to this multiple of its distance to the nearest
+    /// surface edge it sees (a triangle's silhouette edge), where
+    /// the light turns with the angle and no Taylor expansion reaches across.
+    /// Default: the paper's metric alone.
+    #[arg(long)]
+    pub edge_reach: Option<f64>,
     /// Light reflected by the first surface: path traced per camera sample
     /// (`none`), or its indirect part from an occlusion-aware second-order
     /// irradiance cache on the surfaces, direct light sampled per camera sample
@@ -89,7 +95,7 @@ pub enum SurfaceCacheArg {
 pub struct RecordsArgs {
     /// Reconstruct from these records (from `--records-out` for this image) instead
     /// of placing.
-    #[arg(long, conflicts_with_all = ["eps", "caches", "records_out"])]
+    #[arg(long, conflicts_with_all = ["eps", "caches", "records_out", "edge_reach"])]
     pub records_in: Option<PathBuf>,
     /// Write the placed records here (JSON), for tiles rendered in other jobs.
     #[arg(long)]
@@ -121,6 +127,13 @@ impl Cache3dArgs {
         anyhow::ensure!((1..=1024).contains(&self.paths), "--paths must be between 1 and 1024");
         if let Some(n) = self.direct_samples {
             anyhow::ensure!((1..=4096).contains(&n), "--direct-samples must be between 1 and 4096");
+        }
+        if let Some(k) = self.edge_reach {
+            let (lo, hi) = volcache::limits::EDGE_REACH;
+            anyhow::ensure!(
+                k.is_finite() && (lo..=hi).contains(&k),
+                "--edge-reach must be between {lo} and {hi}"
+            );
         }
         anyhow::ensure!(
             (1..=1024).contains(&self.surface_paths),
@@ -168,6 +181,7 @@ impl Cache3dArgs {
         cs.probe.paths = self.paths;
         cs.second_order = self.second_order;
         cs.direct_samples = self.direct_samples;
+        cs.edge_reach = self.edge_reach;
         cs.seed = self.cache_seed;
         Ok((cs, cp))
     }

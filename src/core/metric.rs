@@ -144,6 +144,15 @@ pub struct Extent<S: Space> {
 }
 
 impl<S: Space> Extent<S> {
+    /// Every radius limited to `reach` (the same axes; radii already below stay).
+    pub fn within(self, reach: f64) -> Self {
+        let radii = self.radii;
+        Extent {
+            axes: self.axes,
+            radii: vec_from::<S>(|j| radii[j].min(reach)),
+        }
+    }
+
     /// A ball (disc) of radius `r`.
     pub fn isotropic(r: f64) -> Self {
         Extent {

@@ -166,12 +166,16 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             records_seconds += d.seconds;
             for c in missing {
                 let value = d.payload(cached[c]);
+                let mut extent = cs
+                    .method
+                    .extent(&value.luminance(), d.metric_hessian(cached[c]), &metric);
+                if let Some(k) = cs.edge_reach {
+                    extent = extent.within((k * d.nearest_edge).max(metric.r_min));
+                }
                 let record = Record {
                     position: p.y,
                     value,
-                    extent: cs
-                        .method
-                        .extent(&value.luminance(), d.metric_hessian(cached[c]), &metric),
+                    extent,
                     cost_rays: d.rays,
                 };
                 // A non-finite light field is refused by the cache: the point stays

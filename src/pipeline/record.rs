@@ -18,6 +18,7 @@ use super::moments::{RecordMoments, combine, moment_derivs, weights_towards};
 use super::path::Settings;
 use super::probe::{Outgoing, ProbeSettings, capture};
 use super::proxy::build;
+use super::silhouette::nearest_boundary;
 use super::world::World;
 use crate::core::metric::{CacheMethod, MetricParams};
 use crate::core::rng::mix64;
@@ -58,6 +59,15 @@ pub struct CacheSettings {
     /// lights per point).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub direct_samples: Option<u32>,
+    /// Limit every radius of a record to this multiple of the distance from it to
+    /// the nearest surface edge it sees (a segment's end, a triangle's silhouette
+    /// edge; [`RecordData::nearest_edge`]). Around an edge the light turns with the
+    /// angle seen from the edge, so its derivatives grow as 1/r and 1/r²: a record's
+    /// Taylor expansion cannot be trusted farther than the edge is, whatever its
+    /// Hessian says there (a Hessian taken beside the edge misses the turn). None:
+    /// the paper's metric alone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edge_reach: Option<f64>,
 }
 
 impl CacheSettings {
@@ -79,6 +89,7 @@ impl CacheSettings {
             seed: 1,
             moment_bands: None,
             direct_samples: None,
+            edge_reach: None,
         }
     }
 
@@ -114,6 +125,11 @@ pub struct RecordData<S: Dim> {
     pub rays: u64,
     /// Wall time of the capture and derivatives.
     pub seconds: f64,
+    /// Distance from the record's point to the nearest surface edge its light
+    /// field sees, where the surface ends (a visibility boundary's silhouette
+    /// point, [`super::silhouette::nearest_boundary`]); +∞ when it sees none or
+    /// when [`CacheSettings::edge_reach`] is not asked for.
+    pub nearest_edge: f64,
 }
 
 impl<S: Dim> RecordData<S> {
@@ -191,6 +207,18 @@ pub fn compute_record<W: World>(
         ),
         None => (Vec::new(), Vec::new()),
     };
+    // Only a placement that limits reach by it pays for the boundary's check.
+    let (nearest_edge, edge_rays) = match cs.edge_reach {
+        Some(_) => {
+            let ends: Vec<_> = lf
+                .rays
+                .iter()
+                .filter_map(|r| r.hit.as_ref().and_then(|h| h.edge.map(|e| (h.point, h.normal, e))))
+                .collect();
+            nearest_boundary(world, x, &ends)
+        }
+        None => (f64::INFINITY, 0),
+    };
     Ok(RecordData {
         parts,
         metric_hessians,
@@ -204,8 +232,9 @@ pub fn compute_record<W: World>(
                 <W::S as Space>::axis(0)
             }
         },
-        rays: lf.cost_rays,
+        rays: lf.cost_rays + edge_rays,
         seconds: start.elapsed().as_secs_f64(),
+        nearest_edge,
     })
 }
 

@@ -114,3 +114,41 @@ pub fn find_edges<W: World>(
     }
     (edges, cost)
 }
+
+/// Distance from x to the nearest silhouette point among `ends` (hit point, unit
+/// normal facing x, silhouette point) where the surface truly ends, +∞ when none
+/// does, and the rays cast. A silhouette found between two primitives of one
+/// surface (a mesh's inner edge, seen grazing: neighbouring hits then differ in
+/// depth like a boundary's) is no boundary: a ray to just beyond it, in the hit
+/// primitive's plane, meets the surface there and the candidate is passed over.
+pub fn nearest_boundary<W: World>(world: &W, x: VecOf<W>, ends: &[(VecOf<W>, VecOf<W>, VecOf<W>)]) -> (f64, u64) {
+    let mut candidates: Vec<(f64, usize)> = ends
+        .iter()
+        .enumerate()
+        .map(|(k, &(_, _, e))| (W::S::length(e - x), k))
+        .filter(|(d, _)| d.is_finite() && *d > 0.0)
+        .collect();
+    candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut rays = 0;
+    for (d, k) in candidates {
+        let (point, normal, e) = ends[k];
+        // Outwards across the edge, in the primitive's plane.
+        let along = e - point;
+        let out = along - normal * W::S::dot(along, normal);
+        let len = W::S::length(out);
+        if len.is_nan() || len <= 1e-12 * d {
+            return (d, rays);
+        }
+        let beyond = e + out * (1e-3 * d / len);
+        let to = beyond - x;
+        let t = W::S::length(to);
+        rays += 1;
+        let continues = world
+            .closest_hit(x, to / t, 1.02 * t, None)
+            .is_some_and(|h| h.t > 0.98 * t);
+        if !continues {
+            return (d, rays);
+        }
+    }
+    (f64::INFINITY, rays)
+}

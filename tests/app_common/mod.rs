@@ -77,5 +77,6 @@ pub fn tiny_compare(wb: &mut Workbench) {
         steps: 2,
         res: Some([12, 12]),
         ref_spp: 4,
+        ..Default::default()
     };
 }
