@@ -57,7 +57,8 @@ pub trait QuerySource<S: Dim>: Sync {
 pub type RadianceCache<S> = Cache<S, TaylorRgb<S>>;
 
 /// Light fields per query point, shared by placements of the same scene, method,
-/// probe settings and source.
+/// probe settings and source (and edge reach asked for or not: only then do they
+/// hold [`RecordData::nearest_edge`]).
 pub type RecordMemo<S> = HashMap<u128, RecordData<S>>;
 
 /// Placed caches and what placing them cost.
