@@ -16,7 +16,7 @@
 use crate::progress::{Cancelled, Progress};
 use std::sync::atomic::{AtomicU8, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Called from worker threads when something new is there to show (the app passes
@@ -44,17 +44,19 @@ impl Priority {
         }
     }
 
-    fn pool(self) -> &'static rayon::ThreadPool {
-        static POOLS: [OnceLock<rayon::ThreadPool>; 2] = [OnceLock::new(), OnceLock::new()];
-        POOLS[self as usize].get_or_init(|| {
-            // As many threads as the global pool (`--threads` sets it).
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(rayon::current_num_threads())
-                .thread_name(move |i| format!("volcache-{self:?}-{i}").to_lowercase())
-                .start_handler(move |_| super::lower_priority(self.nice()))
-                .build()
-                .expect("building a thread pool")
-        })
+    /// A pool of one job's own, as many threads as the global pool (`--threads`
+    /// sets it). Not shared between jobs: a rayon worker waiting in a join runs
+    /// any task it can steal, so in a shared pool a cancelled job could wait for a
+    /// long task of the job that replaced it (seconds at full resolution) before
+    /// it could stop. None when the threads cannot be made (the job then runs in
+    /// the global pool).
+    fn pool(self) -> Option<rayon::ThreadPool> {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(rayon::current_num_threads())
+            .thread_name(move |i| format!("volcache-{self:?}-{i}").to_lowercase())
+            .start_handler(move |_| super::lower_priority(self.nice()))
+            .build()
+            .ok()
     }
 }
 
@@ -143,7 +145,10 @@ impl<T: Send + 'static> Job<T> {
             .name("volcache-job".into())
             .spawn(move || {
                 super::lower_priority(priority.nice());
-                let run = || priority.pool().install(|| work(&reporter));
+                let run = || match priority.pool() {
+                    Some(pool) => pool.install(|| work(&reporter)),
+                    None => work(&reporter),
+                };
                 let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(run));
                 let s = &reporter.shared;
                 *s.took.lock().unwrap() = Some(started.elapsed());
