@@ -129,11 +129,7 @@ impl Cache3dArgs {
             anyhow::ensure!((1..=4096).contains(&n), "--direct-samples must be between 1 and 4096");
         }
         if let Some(k) = self.edge_reach {
-            let (lo, hi) = volcache::limits::EDGE_REACH;
-            anyhow::ensure!(
-                k.is_finite() && (lo..=hi).contains(&k),
-                "--edge-reach must be between {lo} and {hi}"
-            );
+            super::common::check_range("--edge-reach", k, volcache::limits::EDGE_REACH)?;
         }
         anyhow::ensure!(
             (1..=1024).contains(&self.surface_paths),
