@@ -2,7 +2,8 @@
 //! distance to the nearest surface edge it sees. That distance comes from the
 //! light field's silhouette points; here it is checked against exact geometry
 //! (a segment's ends in 2D, a box's edges in 3D), and placement is checked to
-//! honour the limit.
+//! honour the limit. A visible point light counts as an edge (the light scattered
+//! around it peaks as sharply).
 
 use glam::{DVec2, DVec3};
 use volcache::flatland::cached_field::{CacheMethod, CacheSettings, RecordMemo, render_cached};
@@ -165,6 +166,76 @@ fn nearest_edge_is_the_nearest_box_edge_3d() {
             "{x:?}: {} vs {exact}",
             d.nearest_edge
         );
+    }
+}
+
+/// A point light is a peak the records must not reach across either: from points
+/// nearer to the bar scene's light than to either end of the bar and seeing it,
+/// the nearest edge is the light's distance (exactly: no rays find it); from
+/// below the bar, where the bar hides the light, it is the nearer end again; and
+/// with the straight light sampled per point (the light field then holds no delta
+/// lights) the light is still found, by its shadow ray.
+#[test]
+fn a_visible_point_light_is_an_edge() {
+    let s = bar();
+    let light = DVec2::new(0.1, 0.7);
+    let seen = [
+        DVec2::new(0.1, 0.6),
+        DVec2::new(-0.2, 0.75),
+        DVec2::new(0.45, 0.9),
+        DVec2::new(0.1, 0.35),
+    ];
+    for direct_samples in [None, Some(16)] {
+        for (k, &x) in seen.iter().enumerate() {
+            let mut cs = settings_2d(256, Some(1.0));
+            cs.direct_samples = direct_samples;
+            let d = compute_record(&s, x, Outgoing::Direction(DVec2::X), &cs, k as u64, &Progress::new()).unwrap();
+            assert!(
+                x.distance(light) < nearest_end(x),
+                "{x:?}: the test wants the light nearer"
+            );
+            assert_eq!(d.nearest_edge, x.distance(light), "{x:?} ({direct_samples:?})");
+        }
+    }
+    let hidden = DVec2::new(0.05, -0.2);
+    let d = compute_record(
+        &s,
+        hidden,
+        Outgoing::Direction(DVec2::X),
+        &settings_2d(1024, Some(1.0)),
+        9,
+        &Progress::new(),
+    )
+    .unwrap();
+    let exact = nearest_end(hidden);
+    assert!(
+        (d.nearest_edge - exact).abs() < 0.01 * exact,
+        "{} vs {exact}",
+        d.nearest_edge
+    );
+}
+
+/// The same in 3D: in fog with a point light and nothing else, a record's nearest
+/// edge is its distance to the light.
+#[test]
+fn a_visible_point_light_is_an_edge_3d() {
+    let json = r#"{
+      "camera": {"position": [0, 1, 3], "look_at": [0, 0.5, 0], "fov_deg": 50},
+      "shapes": [],
+      "lights": [{"point": {"position": [0.2, 0.9, -0.1], "intensity": [2, 2, 2]}}],
+      "medium": {"sigma_a": 0.05, "sigma_s": 0.5, "g": 0.5, "region": {"box": {"min": [-2, -2, -2], "max": [2, 2, 2]}}},
+      "render": {"resolution": [16, 12], "spp": 1, "seed": 1, "max_depth": 4}
+    }"#;
+    let s = volcache::volume::scene::Scene::from_json(json, "<point>", std::path::Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, Default::default());
+    (cs.probe.rays, cs.probe.steps, cs.edge_reach) = (256, 2, Some(1.0));
+    for (k, x) in [DVec3::new(0.0, 0.5, 0.0), DVec3::new(1.0, -0.3, 0.4)]
+        .into_iter()
+        .enumerate()
+    {
+        let d = compute_record(&s, x, Outgoing::Direction(DVec3::Z), &cs, k as u64, &Progress::new()).unwrap();
+        assert_eq!(d.nearest_edge, x.distance(DVec3::new(0.2, 0.9, -0.1)), "{x:?}");
     }
 }
 

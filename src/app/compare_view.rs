@@ -126,7 +126,7 @@ impl Workbench {
             ui.end_row();
             let mut limited = p.edge_reach.is_some();
             ui.checkbox(&mut limited, "reach ≤ edge distance ×")
-                .on_hover_text("Records reach no farther than this multiple of their distance to the nearest surface edge they see (--edge-reach)");
+                .on_hover_text("Records reach no farther than this multiple of their distance to the nearest surface edge or point light they see (--edge-reach)");
             let mut k = p.edge_reach.unwrap_or(1.0);
             ui.add_enabled(limited, DragValue::new(&mut k).range(0.01..=100.0).speed(0.05))
                 .accessible_name("edge reach");

@@ -54,7 +54,8 @@ pub struct CacheArgs {
     pub direct_samples: Option<u32>,
     /// Limit every record's radii to this multiple of its distance to the nearest
     /// surface edge it sees (a segment's end, a triangle's silhouette edge), where
-    /// the light turns with the angle and no Taylor expansion reaches across.
+    /// the light turns with the angle and no Taylor expansion reaches across, or
+    /// to the nearest point light it sees (the scattered light peaks around it).
     /// Default: the paper's metric alone.
     #[arg(long)]
     pub edge_reach: Option<f64>,
@@ -216,13 +217,15 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     };
     let e = run.errors.unwrap_or_default();
     eprintln!(
-        "{:?}: {} records, {:.2} s (placement {:.2} s), {} rays; RMSE {:.4e}, relMSE {:.4e} (reference {} spp, rel. std error {:.2}%)",
+        "{:?}: {} records, {:.2} s (placement {:.2} s), {} rays; RMSE {:.4e} (bias {:+.3e}, mean {:.4e}), relMSE {:.4e} (reference {} spp, rel. std error {:.2}%)",
         run.method,
         run.records,
         run.seconds_total,
         run.seconds_placement,
         run.rays_placement + run.rays_reconstruction,
         e.rmse,
+        e.bias,
+        e.mean_reference,
         e.relmse,
         ref_info.spp,
         100.0 * ref_info.mean_relative_std_error

@@ -63,8 +63,9 @@ pub struct Cache3dArgs {
     #[arg(long)]
     pub direct_samples: Option<u32>,
     /// Limit every record's radii to this multiple of its distance to the nearest
-    /// surface edge it sees (a triangle's silhouette edge), where
-    /// the light turns with the angle and no Taylor expansion reaches across.
+    /// surface edge it sees (a triangle's silhouette edge), where the light turns
+    /// with the angle and no Taylor expansion reaches across, or to the nearest
+    /// point light it sees (the scattered light peaks around it).
     /// Default: the paper's metric alone.
     #[arg(long)]
     pub edge_reach: Option<f64>,

@@ -49,6 +49,12 @@ pub struct ImageErrors {
     pub relmse: f64,
     pub max_abs: f64,
     pub mean_reference: f64,
+    /// Mean of a − b: the part of the error that no averaging over pixels removes
+    /// (a method's bias shows here; noise and extrapolation errors of either
+    /// sign mostly cancel). Its share of the RMSE says whether more samples or
+    /// records can help.
+    #[serde(default)]
+    pub bias: f64,
     pub pixels: usize,
 }
 
@@ -85,6 +91,7 @@ impl ImageErrors {
             relmse,
             max_abs: pairs.iter().map(|(a, b)| (a - b).abs()).fold(0.0, f64::max),
             mean_reference: mean_ref * s,
+            bias: s * mean(|p| p.0 - p.1),
             pixels: pairs.len(),
         }
     }
@@ -163,6 +170,18 @@ mod tests {
                 assert!((e.relmse / want.relmse - 1.0).abs() < 1e-12, "{k}: {e:?}");
             }
         }
+    }
+
+    /// The bias is the signed mean difference: errors of both signs cancel in it,
+    /// a constant offset is all of it; it keeps its sign and scale at 10^±300.
+    #[test]
+    fn bias_is_the_mean_difference() {
+        let e = ImageErrors::of_luminance_pairs(&[(1.5, 1.0), (0.5, 1.0), (2.25, 2.0)]);
+        assert!((e.bias - 0.25 / 3.0).abs() < 1e-15, "{e:?}");
+        let shifted = ImageErrors::of_luminance_pairs(&[(1.1, 1.0), (2.1, 2.0)]);
+        assert!((shifted.bias - shifted.rmse).abs() < 1e-12, "{shifted:?}");
+        let tiny = ImageErrors::of_luminance_pairs(&[(0.9e-300, 1e-300)]);
+        assert!((tiny.bias / -1e-301 - 1.0).abs() < 1e-9, "{tiny:?}");
     }
 
     #[test]

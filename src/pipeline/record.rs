@@ -19,7 +19,7 @@ use super::path::Settings;
 use super::probe::{Outgoing, ProbeSettings, capture};
 use super::proxy::build;
 use super::silhouette::nearest_boundary;
-use super::world::World;
+use super::world::{DirectLight, World};
 use crate::core::metric::{CacheMethod, MetricParams};
 use crate::core::rng::mix64;
 use crate::core::space::Space;
@@ -64,8 +64,9 @@ pub struct CacheSettings {
     /// edge; [`RecordData::nearest_edge`]). Around an edge the light turns with the
     /// angle seen from the edge, so its derivatives grow as 1/r and 1/r²: a record's
     /// Taylor expansion cannot be trusted farther than the edge is, whatever its
-    /// Hessian says there (a Hessian taken beside the edge misses the turn). None:
-    /// the paper's metric alone.
+    /// Hessian says there (a Hessian taken beside the edge misses the turn). A
+    /// visible point light counts as an edge: the light scattered once and again
+    /// peaks around it. None: the paper's metric alone.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub edge_reach: Option<f64>,
 }
@@ -127,7 +128,8 @@ pub struct RecordData<S: Dim> {
     pub seconds: f64,
     /// Distance from the record's point to the nearest surface edge its light
     /// field sees, where the surface ends (a visibility boundary's silhouette
-    /// point, [`super::silhouette::nearest_boundary`]); +∞ when it sees none or
+    /// point, [`super::silhouette::nearest_boundary`]) or point light it sees
+    /// (its distance, no rays); +∞ when it sees none or
     /// when [`CacheSettings::edge_reach`] is not asked for.
     pub nearest_edge: f64,
 }
@@ -215,7 +217,9 @@ pub fn compute_record<W: World>(
                 .iter()
                 .filter_map(|r| r.hit.as_ref().and_then(|h| h.edge.map(|e| (h.point, h.normal, e))))
                 .collect();
-            nearest_boundary(world, x, &ends)
+            let (edge, rays) = nearest_boundary(world, x, &ends);
+            let (light, light_rays) = nearest_point_light(world, &lf);
+            (edge.min(light), rays + light_rays)
         }
         None => (f64::INFINITY, 0),
     };
@@ -236,6 +240,33 @@ pub fn compute_record<W: World>(
         seconds: start.elapsed().as_secs_f64(),
         nearest_edge,
     })
+}
+
+/// Distance from the light field's point to the nearest point light it sees, +∞
+/// without one, and the shadow rays this cost (none when the light field holds
+/// its delta lights already). Around a point light the light scattered once and
+/// again peaks as the first scattering events crowd towards it (their density
+/// grows as 1/r^{d−1}), so, as at a surface's edge, no Taylor expansion reaches
+/// farther than the light is.
+fn nearest_point_light<W: World>(world: &W, lf: &super::probe::LightField<W::S>) -> (f64, u64) {
+    let (lights, rays) = if lf.direct_lights.is_empty() {
+        world.direct_lights(lf.x)
+    } else {
+        (Vec::new(), 0)
+    };
+    let lights = if lf.direct_lights.is_empty() {
+        &lights
+    } else {
+        &lf.direct_lights
+    };
+    let nearest = lights
+        .iter()
+        .filter_map(|l| match l {
+            DirectLight::Point { position, .. } => Some(<W::S as Space>::length(*position - lf.x)),
+            DirectLight::Directional { .. } => None,
+        })
+        .fold(f64::INFINITY, f64::min);
+    (nearest, rays)
 }
 
 /// One record, for figures and JSON (a simplex holds one value per axis).
