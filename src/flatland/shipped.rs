@@ -4,7 +4,7 @@
 //! has no file: errors name it `<embedded NAME>`.
 
 /// (file name, JSON) of every scene in `flatland_scenes/`, by name.
-pub const SHIPPED_SCENES: [(&str, &str); 6] = [
+pub const SHIPPED_SCENES: [(&str, &str); 7] = [
     ("forest.json", include_str!("../../flatland_scenes/forest.json")),
     ("furnace.json", include_str!("../../flatland_scenes/furnace.json")),
     ("half_space.json", include_str!("../../flatland_scenes/half_space.json")),
@@ -12,6 +12,10 @@ pub const SHIPPED_SCENES: [(&str, &str); 6] = [
     (
         "point_in_fog.json",
         include_str!("../../flatland_scenes/point_in_fog.json"),
+    ),
+    (
+        "shaded_lamp.json",
+        include_str!("../../flatland_scenes/shaded_lamp.json"),
     ),
     ("windows.json", include_str!("../../flatland_scenes/windows.json")),
 ];
