@@ -128,8 +128,8 @@ pub struct RecordData<S: Dim> {
     pub seconds: f64,
     /// Distance from the record's point to the nearest surface edge its light
     /// field sees, where the surface ends (a visibility boundary's silhouette
-    /// point, [`super::silhouette::nearest_boundary`]) or point light it sees
-    /// (its distance, no rays); +∞ when it sees none or
+    /// point, [`super::silhouette::nearest_boundary`]), or to the nearest point
+    /// light it sees if that is nearer; +∞ when it sees none or
     /// when [`CacheSettings::edge_reach`] is not asked for.
     pub nearest_edge: f64,
 }
