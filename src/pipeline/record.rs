@@ -218,7 +218,7 @@ pub fn compute_record<W: World>(
                 .filter_map(|r| r.hit.as_ref().and_then(|h| h.edge.map(|e| (h.point, h.normal, e))))
                 .collect();
             let (edge, rays) = nearest_boundary(world, x, &ends);
-            let (light, light_rays) = nearest_point_light(world, &lf);
+            let (light, light_rays) = nearest_point_light(world, &lf, probe.emitted);
             (edge.min(light), rays + light_rays)
         }
         None => (f64::INFINITY, 0),
@@ -243,21 +243,19 @@ pub fn compute_record<W: World>(
 }
 
 /// Distance from the light field's point to the nearest point light it sees, +∞
-/// without one, and the shadow rays this cost (none when the light field holds
-/// its delta lights already). Around a point light the light scattered once and
-/// again peaks as the first scattering events crowd towards it (their density
-/// grows as 1/r^{d−1}), so, as at a surface's edge, no Taylor expansion reaches
-/// farther than the light is.
-fn nearest_point_light<W: World>(world: &W, lf: &super::probe::LightField<W::S>) -> (f64, u64) {
-    let (lights, rays) = if lf.direct_lights.is_empty() {
-        world.direct_lights(lf.x)
+/// without one, and the shadow rays this cost: none when the light field holds
+/// its delta lights (`held`: it was captured with the light arriving straight
+/// from the lights), one per light otherwise. Around a point light the light
+/// scattered once and again peaks as the first scattering events crowd towards
+/// it (their density grows as 1/r^{d−1}), so, as at a surface's edge, no Taylor
+/// expansion reaches farther than the light is.
+fn nearest_point_light<W: World>(world: &W, lf: &super::probe::LightField<W::S>, held: bool) -> (f64, u64) {
+    let found;
+    let (lights, rays) = if held {
+        (&lf.direct_lights, 0)
     } else {
-        (Vec::new(), 0)
-    };
-    let lights = if lf.direct_lights.is_empty() {
-        &lights
-    } else {
-        &lf.direct_lights
+        found = world.direct_lights(lf.x);
+        (&found.0, found.1)
     };
     let nearest = lights
         .iter()
