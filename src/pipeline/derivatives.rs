@@ -414,6 +414,19 @@ pub fn aware_with_floor<S: Dim>(
     settings: &AwareSettings,
     floor_fraction: f64,
 ) -> (PartDerivs<S>, Option<PartDerivs<S>>) {
+    let (plain, floored, _) = aware_with_noise(lf, elements, settings, floor_fraction);
+    (plain, floored)
+}
+
+/// [`aware_with_floor`], and the noise variance of the multiple part's luminance
+/// gradient from its medium samples ([`neighbour_variance`] of the rays' shares;
+/// the bridging elements' shares are not counted).
+pub fn aware_with_noise<S: Dim>(
+    lf: &LightField<S>,
+    elements: &[Element<S>],
+    settings: &AwareSettings,
+    floor_fraction: f64,
+) -> (PartDerivs<S>, Option<PartDerivs<S>>, f64) {
     let clamp = settings.medium_clamp;
     let floor = hessian_radiance_floor(elements.iter().map(|e| e.radiance), floor_fraction);
     let gathered = |e: &Element<S>| e.kind == ElementKind::Medium && !e.bridging;
@@ -438,13 +451,15 @@ pub fn aware_with_floor<S: Dim>(
         })
         .collect();
     let sigma_s = [lf.sigma_s.x, lf.sigma_s.y, lf.sigma_s.z].map(Taylor2::constant);
-    let sample_sums: Vec<Sums<S>> = lf
+    let sample_sums: Vec<(Sums<S>, Vec<S::Vec>)> = lf
         .rays
         .par_chunks(RAY_CHUNK)
         .enumerate()
         .map(|(c, rays)| {
             let mut sums = Sums::default();
+            let mut per_ray = Vec::with_capacity(rays.len());
             for (j, r) in (c * RAY_CHUNK..).zip(rays) {
+                let before = sums.multiple.luminance().grad;
                 for i in 0..r.samples.len() {
                     let Some((measure, size)) = shares.of(j, i) else {
                         continue;
@@ -461,14 +476,21 @@ pub fn aware_with_floor<S: Dim>(
                         sums.floored_multiple += c;
                     }
                 }
+                per_ray.push(sums.multiple.luminance().grad - before);
             }
-            sums
+            (sums, per_ray)
         })
         .collect();
     let mut total = Sums::default();
-    for s in element_sums.into_iter().chain(sample_sums) {
+    for s in element_sums {
         total += s;
     }
+    let mut per_ray = Vec::with_capacity(lf.rays.len());
+    for (s, g) in sample_sums {
+        total += s;
+        per_ray.extend(g);
+    }
+    let grad_var = neighbour_variance::<S>(lf, &per_ray);
     let direct = direct_derivatives(lf);
     let plain = PartDerivs {
         direct,
@@ -480,7 +502,33 @@ pub fn aware_with_floor<S: Dim>(
         single: total.floored_single,
         multiple: total.floored_multiple,
     });
-    (plain, floored)
+    (plain, floored, grad_var)
+}
+
+/// The variance of Σ_j g_j, the rays' shares of a gradient, from the differences
+/// of neighbouring rays (the light field's simplices' edges): a stratified sum's
+/// variance is the sum of its strata's, and two neighbours differ by their noise
+/// (E|g_a − g_b|²/2 = their mean variance) plus the integrand's smooth change
+/// across one stratum, which the estimate counts as noise (it errs high).
+fn neighbour_variance<S: Dim>(lf: &LightField<S>, shares: &[S::Vec]) -> f64 {
+    let (mut sum, mut edges) = (0.0, 0usize);
+    for t in &lf.simplices {
+        let v = t.as_ref();
+        // A pair (2D) has one edge, a triangle (3D) three.
+        let pairs = if v.len() == 2 { 1 } else { v.len() };
+        for a in 0..pairs {
+            let (i, j) = (v[a] as usize, v[(a + 1) % v.len()] as usize);
+            if let (Some(&gi), Some(&gj)) = (shares.get(i), shares.get(j)) {
+                sum += S::length_squared(gi - gj) / 2.0;
+                edges += 1;
+            }
+        }
+    }
+    if edges == 0 {
+        0.0
+    } else {
+        shares.len() as f64 * sum / edges as f64
+    }
 }
 
 /// Rays summed per parallel task (see [`SUM_CHUNK`]).

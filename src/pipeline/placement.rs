@@ -173,6 +173,13 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
                 if let Some(k) = cs.edge_reach {
                     extent = extent.within((k * d.nearest_edge).max(metric.r_min));
                 }
+                // The extent follows the measured gradient; the extrapolation uses
+                // it less where it is mostly noise (`RecordData::payload_to_extrapolate`).
+                let value = if cs.shrink_noisy_gradients {
+                    d.payload_to_extrapolate(cached[c])
+                } else {
+                    value
+                };
                 let record = Record {
                     position: p.y,
                     value,

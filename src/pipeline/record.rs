@@ -12,7 +12,7 @@
 //! proxy's own value is 4–8% low where emitters' outlines cross its elements: the
 //! farther-vertex rule darkens them.)
 
-use super::derivatives::{AwareSettings, PartDerivs, aware_with_floor, unaware, with_plain_values};
+use super::derivatives::{AwareSettings, PartDerivs, aware_with_noise, unaware, with_plain_values};
 use super::dim::Dim;
 use super::moments::{RecordMoments, combine, moment_derivs, weights_towards};
 use super::path::Settings;
@@ -69,6 +69,12 @@ pub struct CacheSettings {
     /// peaks around it. None: the paper's metric alone.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub edge_reach: Option<f64>,
+    /// Extrapolate with each record's multiple-scattering gradient shrunk by its own
+    /// noise ([`RecordData::payload_to_extrapolate`]); its extent still follows the
+    /// measured gradient. On by default: on a point light in thick g = 0.85 fog
+    /// (`shaded_lamp.json`, 800 records, seeds 1–3) RMSE 0.365/0.399/0.419 →
+    /// 0.322/0.338/0.341, relMSE halved; within 2% on occluder, windows, forest.
+    pub shrink_noisy_gradients: bool,
 }
 
 impl CacheSettings {
@@ -91,6 +97,7 @@ impl CacheSettings {
             moment_bands: None,
             direct_samples: None,
             edge_reach: None,
+            shrink_noisy_gradients: true,
         }
     }
 
@@ -132,10 +139,38 @@ pub struct RecordData<S: Dim> {
     /// light it sees if that is nearer; +∞ when it sees none or
     /// when [`CacheSettings::edge_reach`] is not asked for.
     pub nearest_edge: f64,
+    /// Noise variance of the multiple part's luminance gradient from its medium
+    /// samples (ours, [`super::derivatives::aware_with_noise`]; 0 for Jarosz 2008).
+    pub multiple_grad_var: f64,
 }
 
 impl<S: Dim> RecordData<S> {
     /// The value and derivatives of a cached quantity.
+    /// [`RecordData::payload`] with the multiple part's gradient G shrunk by its
+    /// noise variance v ([`RecordData::multiple_grad_var`]): × max(0, 1 − v/|G|²),
+    /// the positive-part James–Stein factor, which estimates |E G|²/|G|² (what
+    /// minimises the expected error of extrapolating with a scaled G) from E|G|² =
+    /// |E G|² + v. In thick forward-scattering fog a record's multiple-scattering
+    /// gradient at 1024 rays is mostly noise away from the lights, and extrapolating
+    /// with it doubled the error of the zero-order value there.
+    pub fn payload_to_extrapolate(&self, q: Cached) -> crate::core::taylor_rgb::TaylorRgb<S> {
+        let mut m = self.parts.multiple;
+        let g2 = <S as Space>::length_squared(m.luminance().grad);
+        let shrink = if g2 > 0.0 {
+            (1.0 - self.multiple_grad_var / g2).max(0.0)
+        } else {
+            1.0
+        };
+        for ch in &mut m.channels {
+            ch.grad = ch.grad * shrink;
+        }
+        match q {
+            Cached::Scattered => self.parts.single + m,
+            Cached::Single => self.parts.single,
+            Cached::Multiple => m,
+        }
+    }
+
     pub fn payload(&self, q: Cached) -> crate::core::taylor_rgb::TaylorRgb<S> {
         match q {
             Cached::Scattered => self.parts.single + self.parts.multiple,
@@ -187,9 +222,11 @@ pub fn compute_record<W: World>(
         CacheMethod::Ours => build(&lf, cs.aware.rule),
         CacheMethod::Jarosz08 => Vec::new(),
     };
+    let mut multiple_grad_var = 0.0;
     let (parts, metric_hessians) = match cs.method {
         CacheMethod::Ours => {
-            let (parts, floored) = aware_with_floor(&lf, &elements, &cs.aware, cs.hessian_floor);
+            let (parts, floored, var) = aware_with_noise(&lf, &elements, &cs.aware, cs.hessian_floor);
+            multiple_grad_var = var;
             let floored = floored.unwrap_or(parts);
             let lum = |t: crate::core::taylor_rgb::TaylorRgb<W::S>| t.luminance().hess;
             let hessians = [
@@ -239,6 +276,7 @@ pub fn compute_record<W: World>(
         rays: lf.cost_rays + edge_rays,
         seconds: start.elapsed().as_secs_f64(),
         nearest_edge,
+        multiple_grad_var,
     })
 }
 
