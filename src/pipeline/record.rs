@@ -115,6 +115,18 @@ pub enum Cached {
     Multiple,
 }
 
+impl Cached {
+    /// This quantity from the single and multiple parts (values, derivatives or
+    /// moments alike).
+    fn of<T: std::ops::Add<Output = T>>(self, single: T, multiple: T) -> T {
+        match self {
+            Cached::Scattered => single + multiple,
+            Cached::Single => single,
+            Cached::Multiple => multiple,
+        }
+    }
+}
+
 /// What one light field gives a record, kept to re-derive extents for another ε.
 #[derive(Clone, Debug)]
 pub struct RecordData<S: Dim> {
@@ -163,30 +175,21 @@ impl<S: Dim> RecordData<S> {
         for ch in &mut m.channels {
             ch.grad = ch.grad * shrink;
         }
-        match q {
-            Cached::Scattered => self.parts.single + m,
-            Cached::Single => self.parts.single,
-            Cached::Multiple => m,
-        }
+        q.of(self.parts.single, m)
     }
 
     /// The value and derivatives of a cached quantity.
     pub fn payload(&self, q: Cached) -> crate::core::taylor_rgb::TaylorRgb<S> {
-        match q {
-            Cached::Scattered => self.parts.single + self.parts.multiple,
-            Cached::Single => self.parts.single,
-            Cached::Multiple => self.parts.multiple,
-        }
+        q.of(self.parts.single, self.parts.multiple)
     }
 
     /// The moments of a cached quantity (empty without moments).
     pub fn moment_payload(&self, q: Cached) -> RecordMoments<S> {
-        let of = |p: &PartDerivs<S>| match q {
-            Cached::Scattered => p.single + p.multiple,
-            Cached::Single => p.single,
-            Cached::Multiple => p.multiple,
-        };
-        let moments: Vec<_> = self.moments.iter().map(of).collect();
+        let moments: Vec<_> = self
+            .moments
+            .iter()
+            .map(|p: &PartDerivs<S>| q.of(p.single, p.multiple))
+            .collect();
         let as_placed = combine(&moments, &self.placed_weights);
         RecordMoments {
             moments,
