@@ -25,6 +25,9 @@ pub enum BenchCommand {
     Rays3d(super::bench_rays3d::Rays3dBench),
     /// Cost of one cache point: plain value, unaware and aware derivatives, per N.
     Derivatives(super::bench_derivs::DerivBench),
+    /// One record of ours: cost and error (value, gradient, Hessian) against a
+    /// converged record, per probe variant (directions × march steps).
+    Records(super::bench_records::RecordsBench),
     /// Error vs time and vs cache count: ours, jarosz08 (ε swept) and pt (spp swept).
     Tradeoff(super::bench_tradeoff::TradeoffArgs),
     /// 3D error vs time and vs cache count: ours, jarosz08 (record counts swept) and
@@ -98,6 +101,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<ExitCode> {
         BenchCommand::Flatland(b) => flatland(b),
         BenchCommand::Rays3d(b) => super::bench_rays3d::run(b),
         BenchCommand::Derivatives(b) => super::bench_derivs::run(b),
+        BenchCommand::Records(b) => super::bench_records::run(b),
         BenchCommand::Tradeoff(b) => super::bench_tradeoff::run(b),
         BenchCommand::Tradeoff3d(b) => super::bench_tradeoff3d::run(b),
         BenchCommand::Moments3d(b) => super::bench_moments3d::run(b),

@@ -59,6 +59,12 @@ pub struct CacheArgs {
     /// Default: the paper's metric alone.
     #[arg(long)]
     pub edge_reach: Option<f64>,
+    /// Russian roulette of the probes' phase-sampled paths by the phase's weight
+    /// of each direction towards ω_o (`ProbeSettings::phase_roulette`: followed
+    /// with probability min(1, C·f/f̄)); 0 turns it off. Unbiased; saves rays in
+    /// anisotropic fog (see `volcache bench records`).
+    #[arg(long, default_value_t = 0.0)]
+    pub phase_roulette: f64,
     /// Resolution WxH (default: half the scene's render resolution).
     #[arg(long, value_parser = parse_res)]
     pub res: Option<[u32; 2]>,
@@ -108,6 +114,7 @@ pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> C
     cs.second_order = a.second_order;
     cs.direct_samples = a.direct_samples;
     cs.edge_reach = a.edge_reach;
+    cs.probe.phase_roulette = a.phase_roulette;
     cs
 }
 
@@ -184,6 +191,7 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
     if let Some(k) = a.edge_reach {
         check_range("--edge-reach", k, limits::EDGE_REACH)?;
     }
+    check_range("--phase-roulette", a.phase_roulette, (0.0, 100.0))?;
     ensure_memory(fp.width * fp.height, CACHES_BYTES_PER_PIXEL, "the field")
 }
 

@@ -5,6 +5,7 @@ mod bench;
 mod bench_derivs;
 mod bench_moments3d;
 mod bench_rays3d;
+mod bench_records;
 mod bench_tradeoff;
 mod bench_tradeoff3d;
 mod caches;

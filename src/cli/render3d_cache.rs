@@ -62,6 +62,12 @@ pub struct Cache3dArgs {
     /// split).
     #[arg(long)]
     pub direct_samples: Option<u32>,
+    /// Russian roulette of the probes' phase-sampled paths by the phase's weight
+    /// of each direction towards ω_o (`ProbeSettings::phase_roulette`: followed
+    /// with probability min(1, C·f/f̄)); 0 turns it off. Unbiased; saves rays in
+    /// anisotropic fog (see `volcache bench records`).
+    #[arg(long, default_value_t = 0.0)]
+    pub phase_roulette: f64,
     /// Limit every record's radii to this multiple of its distance to the nearest
     /// surface edge it sees (a triangle's silhouette edge), where the light turns
     /// with the angle and no Taylor expansion reaches across, or to the nearest
@@ -132,6 +138,7 @@ impl Cache3dArgs {
         if let Some(k) = self.edge_reach {
             super::common::check_range("--edge-reach", k, volcache::limits::EDGE_REACH)?;
         }
+        super::common::check_range("--phase-roulette", self.phase_roulette, (0.0, 100.0))?;
         anyhow::ensure!(
             (1..=1024).contains(&self.surface_paths),
             "--surface-paths must be between 1 and 1024"
@@ -179,6 +186,7 @@ impl Cache3dArgs {
         cs.second_order = self.second_order;
         cs.direct_samples = self.direct_samples;
         cs.edge_reach = self.edge_reach;
+        cs.probe.phase_roulette = self.phase_roulette;
         cs.seed = self.cache_seed;
         Ok((cs, cp))
     }

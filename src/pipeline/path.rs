@@ -213,19 +213,39 @@ pub fn sample_at<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Parts {
-    let (parts, _) = sample_at_each(world, x, lobe, skip, settings, s, rays, &mut ignore);
+    let (parts, _) = sample_at_each(world, x, lobe, skip, 1.0, settings, s, rays, &mut ignore);
     parts.scaled(prefactor)
+}
+
+/// [`sample_at`] (no prefactor) whose lobe-sampled path is followed with
+/// probability `keep_path` and weighted 1/`keep_path` when it is (Russian roulette
+/// of the expensive part; the light samples are always taken).
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
+pub fn sample_at_rouletted<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    lobe: &Lobe<W::S>,
+    skip: Option<u32>,
+    keep_path: f64,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Parts {
+    sample_at_each(world, x, lobe, skip, keep_path, settings, s, rays, &mut ignore).0
 }
 
 /// [`sample_at`] without the prefactor, showing its parts: `each` sees every light
 /// sample's direction and share, and the lobe-sampled path comes back as its
-/// direction and what it brought (weight · L), if the lobe drew one.
+/// direction and what it brought (weight · L), if the lobe drew one and the path
+/// survived its roulette (probability `keep_path`, one draw only when it is below
+/// one; what it brought is then divided by it).
 #[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn sample_at_each<W: World>(
     world: &W,
     x: VecOf<W>,
     lobe: &Lobe<W::S>,
     skip: Option<u32>,
+    keep_path: f64,
     settings: &Settings,
     s: &mut Sampler,
     rays: &mut u64,
@@ -236,9 +256,15 @@ pub fn sample_at_each<W: World>(
         single: world.sampled_nee_each(x, lobe, skip, true, s, rays, each),
         multiple: Rgb::ZERO,
     };
-    let (w, weight, pdf) = lobe.sample(s);
+    let (w, mut weight, pdf) = lobe.sample(s);
     if weight == Rgb::ZERO {
         return (parts, None);
+    }
+    if keep_path < 1.0 {
+        if s.next_f64() >= keep_path {
+            return (parts, None);
+        }
+        weight /= keep_path;
     }
     let (l, first) = radiance_path(world, x, w, skip, Some(pdf), settings, s, rays);
     let brought = weight * l;
@@ -258,12 +284,14 @@ pub fn sample_at_each<W: World>(
 /// Why: a probe's medium sample m is seen from x along ω = (m − x)/r, so what m sends
 /// to x turns with x; holding it fixed leaves out ∫ K ∂_ωL·∇_x ω dm, which is
 /// log-divergent near x (∇_x ω ∝ 1/r) wherever f ≠ const and the light at m is
-/// anisotropic.
+/// anisotropic. `keep_path`: the lobe-sampled path's roulette ([`sample_at_each`]).
+#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn scattered_with_slope<W: World>(
     world: &W,
     x: VecOf<W>,
     phase: <W::S as Dim>::Phase,
     travel: VecOf<W>,
+    keep_path: f64,
     settings: &Settings,
     s: &mut Sampler,
     rays: &mut u64,
@@ -276,7 +304,7 @@ pub fn scattered_with_slope<W: World>(
             *c += along * v;
         }
     };
-    let (parts, path) = sample_at_each(world, x, &lobe, None, settings, s, rays, &mut tap);
+    let (parts, path) = sample_at_each(world, x, &lobe, None, keep_path, settings, s, rays, &mut tap);
     let (score, path) = path.map_or((W::S::zero(), Rgb::ZERO), |(w, brought)| {
         (phase_log_slope::<W::S>(&phase, travel, w), brought)
     });
@@ -285,6 +313,7 @@ pub fn scattered_with_slope<W: World>(
         slope,
         score,
         path,
+        keep: keep_path.clamp(f64::MIN_POSITIVE, 1.0),
     }
 }
 
@@ -299,14 +328,20 @@ pub struct ScatteredSample<V> {
     pub slope: [V; 3],
     /// ∇ ln f at the lobe-sampled direction.
     pub score: V,
-    /// What the lobe-sampled path brought.
+    /// What the lobe-sampled path brought (divided by its roulette's probability).
     pub path: Rgb,
+    /// The probability with which the path was followed (one without roulette).
+    pub keep: f64,
 }
 
 impl<V: Copy + std::ops::Mul<f64, Output = V> + std::ops::Add<Output = V>> ScatteredSample<V> {
-    /// The gradient per channel with baseline `b`.
+    /// The gradient per channel with baseline `b` (an estimate of the path's
+    /// mean): a followed path's score term is score·(path − b/q), the 1/q weight
+    /// applied to the difference from the baseline and not to the path alone, so
+    /// that the roulette does not undo the baseline (unbiased either way: the score's
+    /// mean is zero).
     pub fn gradient(&self, b: Rgb) -> [V; 3] {
-        let d = self.path - b;
+        let d = self.path - b / self.keep;
         let mut g = self.slope;
         for (c, v) in g.iter_mut().zip([d.x, d.y, d.z]) {
             *c = *c + self.score * v;

@@ -217,6 +217,12 @@ pub fn compute_record<W: World>(
     let probe = ProbeSettings {
         slopes: cs.probe.slopes && cs.method == CacheMethod::Ours,
         emitted: cs.probe.emitted && cs.direct_samples.is_none(),
+        // Moments serve every ω_o: no direction may be rouletted by one ω_o's phase.
+        phase_roulette: if cs.moment_bands.is_some() {
+            0.0
+        } else {
+            cs.probe.phase_roulette
+        },
         ..cs.probe
     };
     let mut lf = capture(world, x, out, &probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;

@@ -17,6 +17,8 @@
 //!   tracing at a sample count or a time budget); [`speedup`]: the speed-up of ours
 //!   over Jarosz 2008 at equal error; [`targets`]: each method's time to 3%, 1% and
 //!   0.3% relative RMSE (the reference's noise removed) and the ratios to ours.
+//! - [`record_cost`]: what one record costs and how far it is from a converged
+//!   record, per probe variant (`volcache bench records`).
 //! - [`light_field_derivs`]: a point's derivatives by every method (aware and
 //!   unaware on one shared light field, the reference in batches);
 //!   [`gradients`]: the gradient study over a grid and a line;
@@ -29,6 +31,7 @@ pub mod gradient_summary;
 pub mod gradients;
 pub mod light_field_derivs;
 pub mod moments3d;
+pub mod record_cost;
 pub mod reference2d;
 pub mod reference3d;
 pub mod runs3d;
