@@ -30,7 +30,8 @@ pub struct RecordsBench {
     /// Output JSON (default: results/bench_records_<scene>.json).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Probe variants as RAYSxSTEPS, comma-separated; the first is the baseline.
+    /// Probe variants as RAYSxSTEPS (or RAYSxSTEPSgK with the march's refinement
+    /// K), comma-separated; the first is the baseline.
     #[arg(long, value_delimiter = ',', default_values_t = ["1024x16".to_string(), "512x16".to_string(), "2048x8".to_string(), "1024x8".to_string()])]
     pub variants: Vec<String>,
     /// The converged record's probe (RAYSxSTEPS), and how many independent batches
@@ -58,20 +59,21 @@ pub struct RecordsBench {
 }
 
 fn parse_variant(s: &str) -> anyhow::Result<Variant> {
-    let (r, k) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| anyhow::anyhow!("a probe variant is RAYSxSTEPS (e.g. 1024x16), got {s:?}"))?;
-    let rays: usize = r
-        .trim()
-        .parse()
-        .map_err(|_| anyhow::anyhow!("bad ray count in {s:?}"))?;
-    let steps: usize = k
-        .trim()
-        .parse()
-        .map_err(|_| anyhow::anyhow!("bad step count in {s:?}"))?;
+    let bad = || anyhow::anyhow!("a probe variant is RAYSxSTEPS or RAYSxSTEPSgK (e.g. 1024x16, 1024x16g0), got {s:?}");
+    let (r, rest) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (k, grading) = match rest.split_once('g') {
+        Some((k, g)) => (k, Some(g.trim().parse::<f64>().map_err(|_| bad())?)),
+        None => (rest, None),
+    };
+    let rays: usize = r.trim().parse().map_err(|_| bad())?;
+    let steps: usize = k.trim().parse().map_err(|_| bad())?;
     anyhow::ensure!((3..=1 << 20).contains(&rays), "rays in {s:?} must lie in 3..=1048576");
     anyhow::ensure!((1..=4096).contains(&steps), "steps in {s:?} must lie in 1..=4096");
-    Ok(Variant { rays, steps })
+    if let Some(g) = grading {
+        let (lo, hi) = volcache::limits::GRADING;
+        anyhow::ensure!((lo..=hi).contains(&g), "the grading in {s:?} must lie in {lo}..={hi}");
+    }
+    Ok(Variant { rays, steps, grading })
 }
 
 #[derive(Serialize)]
@@ -248,11 +250,10 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
     };
     let summary = summarise(&variants, &costs);
     println!(
-        "records of ours, {stem}: {} points × {} seeds, reference {}x{} × {} batches, {} threads",
+        "records of ours, {stem}: {} points × {} seeds, reference {} × {} batches, {} threads",
         reports.len(),
         a.seeds,
-        reference_variant.rays,
-        reference_variant.steps,
+        reference_variant.label(),
         a.reference_batches,
         rayon::current_num_threads()
     );
@@ -274,7 +275,7 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
     for s in &summary {
         println!(
             "{:>11} {:>9.2} {:>11.0} {:>8.4} {:>8.4} {:>8.4} {:>9.2} {:>9.2} {:>9.2}   {:>26.2} {:>7.2} {:>7.2}",
-            format!("{}x{}", s.variant.rays, s.variant.steps),
+            s.variant.label(),
             1e3 * s.seconds_per_record,
             s.rays_per_record,
             s.rms_errors.value,

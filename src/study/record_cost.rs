@@ -17,11 +17,13 @@ use crate::pipeline::world::{VecOf, World};
 use crate::progress::{Cancelled, Progress};
 use serde::Serialize;
 
-/// A probe variant: directions per record and march samples per direction.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+/// A probe variant: directions per record, march samples per direction and, if
+/// given, the march's refinement towards x (else the settings').
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Variant {
     pub rays: usize,
     pub steps: usize,
+    pub grading: Option<f64>,
 }
 
 impl Variant {
@@ -30,7 +32,18 @@ impl Variant {
         let mut c = cs.clone();
         c.probe.rays = self.rays.max(3);
         c.probe.steps = self.steps.max(1);
+        if let Some(k) = self.grading {
+            c.probe.grading = k;
+        }
         c
+    }
+
+    /// RAYSxSTEPS, with gK when the grading is given.
+    pub fn label(&self) -> String {
+        match self.grading {
+            Some(k) => format!("{}x{}g{k}", self.rays, self.steps),
+            None => format!("{}x{}", self.rays, self.steps),
+        }
     }
 }
 
@@ -270,7 +283,11 @@ mod tests {
     /// error at equal time a quarter (error ∝ 1/√cost); the baseline is one.
     #[test]
     fn efficiency_is_records_per_second_at_equal_error() {
-        let v = |rays| Variant { rays, steps: 8 };
+        let v = |rays| Variant {
+            rays,
+            steps: 8,
+            grading: None,
+        };
         let costs = vec![
             vec![cost(2.0, 0.1), cost(4.0, 0.2)],
             vec![cost(1.0, 0.1), cost(2.0, 0.2)],
