@@ -21,7 +21,7 @@ use volcache::pipeline::probe::Outgoing;
 use volcache::pipeline::record::CacheSettings;
 use volcache::pipeline::world::{VecOf, World};
 use volcache::progress::{Cancelled, Progress};
-use volcache::study::record_cost::{PointCost, Variant, VariantSummary, measure, reference, summarise};
+use volcache::study::record_cost::{PointCost, Variant, VariantSummary, measure, reference, summarise, truth};
 
 #[derive(Args, Debug)]
 pub struct RecordsBench {
@@ -50,6 +50,16 @@ pub struct RecordsBench {
     /// samples and cache only the rest (as `caches --direct-samples`).
     #[arg(long)]
     pub direct_samples: Option<u32>,
+    /// Also judge the variants' gradients against central differences of path
+    /// tracing (common random numbers) with this many paths per stencil point, in
+    /// `--truth-batches` independent batches; the step is `--truth-step` × the
+    /// scene's size.
+    #[arg(long)]
+    pub truth_spp: Option<u32>,
+    #[arg(long, default_value_t = 4)]
+    pub truth_batches: usize,
+    #[arg(long, default_value_t = 2e-3)]
+    pub truth_step: f64,
     /// The probes' phase roulette c (`ProbeSettings::phase_roulette`; 0: off), for
     /// the variants (the converged record keeps the library's default).
     #[arg(long)]
@@ -131,13 +141,32 @@ impl Plan<'_> {
                 id,
                 &progress,
             )?;
+            let truth = self.a.truth_spp.map(|spp| {
+                let h = self.a.truth_step * world.scale();
+                let seed = volcache::study::seeds::reference_seed(self.cs.seed) ^ (id << 20);
+                truth(world, x, out(x), &self.cs, (h, spp, self.a.truth_batches), seed)
+            });
+            if let Some(t) = &truth {
+                eprintln!("  finite-difference gradient noise {:.1}%", 100.0 * t.noise);
+            }
             let mut costs = Vec::new();
             for (v, &variant) in self.variants.iter().enumerate() {
                 let mut cs = self.cs.clone();
                 if let Some(c) = self.a.phase_roulette {
                     cs.probe.phase_roulette = c;
                 }
-                let c = measure(world, x, out(x), &cs, variant, self.a.seeds, id, &r, &progress)?;
+                let c = measure(
+                    world,
+                    x,
+                    out(x),
+                    &cs,
+                    variant,
+                    self.a.seeds,
+                    id,
+                    &r,
+                    truth.as_ref(),
+                    &progress,
+                )?;
                 by_variant[v].push(c.clone());
                 costs.push(c);
             }
@@ -288,6 +317,30 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
             s.median_efficiency.gradient,
             s.median_efficiency.hessian
         );
+    }
+    if a.truth_spp.is_some() {
+        println!("gradients against central differences of path tracing (medians over points, relative to |∇|):");
+        println!(
+            "{:>11} {:>9} {:>12} {:>11}",
+            "variant", "rms", "mean's err", "its noise"
+        );
+        for (v, variant) in variants.iter().enumerate() {
+            let med = |f: &dyn Fn(&volcache::study::record_cost::TruthErrors) -> f64| {
+                let mut x: Vec<f64> = reports
+                    .iter()
+                    .filter_map(|p| p.costs[v].gradient_vs_truth.as_ref().map(f))
+                    .collect();
+                x.sort_by(f64::total_cmp);
+                x.get(x.len() / 2).copied().unwrap_or(f64::NAN)
+            };
+            println!(
+                "{:>11} {:>9.3} {:>12.3} {:>11.3}",
+                variant.label(),
+                med(&|t| t.rms),
+                med(&|t| t.mean),
+                med(&|t| t.mean_noise)
+            );
+        }
     }
     let report = Report {
         volcache_version: env!("CARGO_PKG_VERSION"),

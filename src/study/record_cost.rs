@@ -11,6 +11,7 @@
 
 use crate::core::space::Space;
 use crate::core::taylor::Taylor2;
+use crate::pipeline::derivatives;
 use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::{CacheSettings, Cached, compute_record};
 use crate::pipeline::world::{VecOf, World};
@@ -69,6 +70,64 @@ pub struct PointCost {
     pub seconds: f64,
     pub rays: f64,
     pub errors: RelErrors,
+    /// Against the finite-difference gradient (when measured): the records'
+    /// relative rms error, and their mean's (the estimator's bias, up to the
+    /// mean's own noise, `gradient_mean_noise`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gradient_vs_truth: Option<TruthErrors>,
+}
+
+/// A variant's gradients against the finite-difference truth, relative to its
+/// norm.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct TruthErrors {
+    pub rms: f64,
+    pub mean: f64,
+    pub mean_noise: f64,
+}
+
+/// The gradient of the cached luminance by central differences of path tracing
+/// (common random numbers): the mean of `batches` independent batches, and its
+/// noise (their spread / √batches).
+#[derive(Clone, Copy, Debug)]
+pub struct Truth<V> {
+    pub gradient: V,
+    pub noise: f64,
+}
+
+/// [`Truth`] at `x`: `batches` batches of [`derivatives::reference`] with step `h`
+/// and `spp` paths per stencil point.
+#[allow(clippy::too_many_arguments)] // the stencil's inputs are spelled out
+pub fn truth<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    out: Outgoing<VecOf<W>>,
+    cs: &CacheSettings,
+    (h, spp, batches): (f64, u32, usize),
+    seed: u64,
+) -> Truth<VecOf<W>> {
+    let batches = batches.max(2);
+    let grads: Vec<VecOf<W>> = (0..batches)
+        .map(|b| {
+            let d = derivatives::reference(
+                world,
+                x,
+                out,
+                h,
+                spp,
+                &cs.probe.settings,
+                seed.wrapping_add(b as u64),
+                false,
+            );
+            (d.parts.single + d.parts.multiple).luminance().grad
+        })
+        .collect();
+    let mean = grads.iter().fold(W::S::zero(), |a, &g| a + g) / batches as f64;
+    let var = grads.iter().map(|&g| W::S::length_squared(g - mean)).sum::<f64>() / (batches - 1) as f64;
+    Truth {
+        gradient: mean,
+        noise: (var / batches as f64).sqrt() / W::S::length(mean).max(f64::MIN_POSITIVE),
+    }
 }
 
 /// The converged record at a point.
@@ -164,11 +223,13 @@ pub fn measure<W: World>(
     seeds: usize,
     id: u64,
     reference: &Reference<W::S>,
+    truth: Option<&Truth<VecOf<W>>>,
     progress: &Progress,
 ) -> Result<PointCost, Cancelled> {
     let c0 = variant.apply(cs);
     let seeds = seeds.max(1);
     let (mut sq, mut seconds, mut rays) = ([0.0; 3], 0.0, 0u64);
+    let mut grads = Vec::with_capacity(seeds);
     for k in 0..seeds {
         let mut c = c0.clone();
         c.seed = cs.seed.wrapping_add(k as u64);
@@ -176,13 +237,27 @@ pub fn measure<W: World>(
         for (a, d) in sq.iter_mut().zip(squared_diff(&t, &reference.mean)) {
             *a += d;
         }
+        grads.push(t.grad);
         seconds += s;
         rays += r;
     }
+    let gradient_vs_truth = truth.map(|t| {
+        let norm = W::S::length(t.gradient).max(f64::MIN_POSITIVE);
+        let n = seeds as f64;
+        let mean = grads.iter().fold(W::S::zero(), |a, &g| a + g) / n;
+        let ms = grads.iter().map(|&g| W::S::length_squared(g - t.gradient)).sum::<f64>() / n;
+        let spread = grads.iter().map(|&g| W::S::length_squared(g - mean)).sum::<f64>() / (n - 1.0).max(1.0);
+        TruthErrors {
+            rms: ms.sqrt() / norm,
+            mean: W::S::length(mean - t.gradient) / norm,
+            mean_noise: (spread / n).sqrt() / norm,
+        }
+    });
     Ok(PointCost {
         seconds: seconds / seeds as f64,
         rays: rays as f64 / seeds as f64,
         errors: relative(sq, seeds, norms(&reference.mean)),
+        gradient_vs_truth,
     })
 }
 
@@ -269,6 +344,7 @@ mod tests {
 
     fn cost(seconds: f64, e: f64) -> PointCost {
         PointCost {
+            gradient_vs_truth: None,
             seconds,
             rays: 1.0,
             errors: RelErrors {
