@@ -287,9 +287,10 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
         rayon::current_num_threads()
     );
     println!(
-        "{:>11} {:>9} {:>11} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9}   median over points: {:>7} {:>7} {:>7}",
+        "{:>11} {:>9} {:>8} {:>11} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9}   median over points: {:>7} {:>7} {:>7}",
         "variant",
         "ms/rec",
+        "capture",
         "rays/rec",
         "e_val",
         "e_grad",
@@ -303,9 +304,10 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
     );
     for s in &summary {
         println!(
-            "{:>11} {:>9.2} {:>11.0} {:>8.4} {:>8.4} {:>8.4} {:>9.2} {:>9.2} {:>9.2}   {:>26.2} {:>7.2} {:>7.2}",
+            "{:>11} {:>9.2} {:>7.0}% {:>11.0} {:>8.4} {:>8.4} {:>8.4} {:>9.2} {:>9.2} {:>9.2}   {:>26.2} {:>7.2} {:>7.2}",
             s.variant.label(),
             1e3 * s.seconds_per_record,
+            100.0 * s.capture_share,
             s.rays_per_record,
             s.rms_errors.value,
             s.rms_errors.gradient,

@@ -145,6 +145,9 @@ pub struct RecordData<S: Dim> {
     pub rays: u64,
     /// Wall time of the capture and derivatives.
     pub seconds: f64,
+    /// Of `seconds`: capturing the light field (its rays and their recursive
+    /// estimates); the rest is the proxy, the derivatives and the extent's checks.
+    pub capture_seconds: f64,
     /// Distance from the record's point to the nearest surface edge its light
     /// field sees, where the surface ends (a visibility boundary's silhouette
     /// point, [`super::silhouette::nearest_boundary`]), or to the nearest point
@@ -284,6 +287,7 @@ pub fn compute_record<W: World>(
         },
         rays: lf.cost_rays + edge_rays,
         seconds: start.elapsed().as_secs_f64(),
+        capture_seconds: lf.seconds,
         nearest_edge,
         multiple_grad_var,
     })

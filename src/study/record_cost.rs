@@ -66,8 +66,10 @@ impl RelErrors {
 /// One variant at one point.
 #[derive(Clone, Debug, Serialize)]
 pub struct PointCost {
-    /// Mean wall-clock seconds and rays per record.
+    /// Mean wall-clock seconds and rays per record, and of the seconds those of
+    /// the light field's capture.
     pub seconds: f64,
+    pub capture_seconds: f64,
     pub rays: f64,
     pub errors: RelErrors,
     /// Against the finite-difference gradient (when measured): the records'
@@ -139,7 +141,7 @@ pub struct Reference<S: Space> {
 }
 
 /// Luminance of the cached scattering (single + multiple) of ours' record at `x`
-/// with `cs` (stream `id`), its seconds and rays.
+/// with `cs` (stream `id`), its seconds (all, and the capture's) and rays.
 pub fn record_luminance<W: World>(
     world: &W,
     x: VecOf<W>,
@@ -147,9 +149,13 @@ pub fn record_luminance<W: World>(
     cs: &CacheSettings,
     id: u64,
     progress: &Progress,
-) -> Result<(Taylor2<W::S>, f64, u64), Cancelled> {
+) -> Result<(Taylor2<W::S>, [f64; 2], u64), Cancelled> {
     let r = compute_record(world, x, out, cs, id, progress)?;
-    Ok((r.payload(Cached::Scattered).luminance(), r.seconds, r.rays))
+    Ok((
+        r.payload(Cached::Scattered).luminance(),
+        [r.seconds, r.capture_seconds],
+        r.rays,
+    ))
 }
 
 /// Squared distances of `a` from `b` in value, gradient and Hessian.
@@ -228,7 +234,7 @@ pub fn measure<W: World>(
 ) -> Result<PointCost, Cancelled> {
     let c0 = variant.apply(cs);
     let seeds = seeds.max(1);
-    let (mut sq, mut seconds, mut rays) = ([0.0; 3], 0.0, 0u64);
+    let (mut sq, mut seconds, mut capture, mut rays) = ([0.0; 3], 0.0, 0.0, 0u64);
     let mut grads = Vec::with_capacity(seeds);
     for k in 0..seeds {
         let mut c = c0.clone();
@@ -238,7 +244,8 @@ pub fn measure<W: World>(
             *a += d;
         }
         grads.push(t.grad);
-        seconds += s;
+        seconds += s[0];
+        capture += s[1];
         rays += r;
     }
     let gradient_vs_truth = truth.map(|t| {
@@ -255,6 +262,7 @@ pub fn measure<W: World>(
     });
     Ok(PointCost {
         seconds: seconds / seeds as f64,
+        capture_seconds: capture / seeds as f64,
         rays: rays as f64 / seeds as f64,
         errors: relative(sq, seeds, norms(&reference.mean)),
         gradient_vs_truth,
@@ -268,6 +276,8 @@ pub fn measure<W: World>(
 pub struct VariantSummary {
     pub variant: Variant,
     pub seconds_per_record: f64,
+    /// The share of a record's time spent capturing its light field.
+    pub capture_share: f64,
     pub rays_per_record: f64,
     pub rms_errors: RelErrors,
     /// Records per second at the baseline's error, relative to the baseline's.
@@ -313,10 +323,12 @@ pub fn summarise(variants: &[Variant], costs: &[Vec<PointCost>]) -> Vec<VariantS
         .zip(costs)
         .map(|(&variant, pc)| {
             let (t, rays, e2) = stats(pc);
+            let capture = pc.iter().map(|c| c.capture_seconds).sum::<f64>() / pc.len().max(1) as f64;
             let eff = |k: usize| (t0 * e0[k]) / (t * e2[k]).max(f64::MIN_POSITIVE);
             VariantSummary {
                 variant,
                 seconds_per_record: t,
+                capture_share: capture / t.max(f64::MIN_POSITIVE),
                 rays_per_record: rays,
                 rms_errors: RelErrors {
                     value: e2[0].sqrt(),
@@ -345,6 +357,7 @@ mod tests {
     fn cost(seconds: f64, e: f64) -> PointCost {
         PointCost {
             gradient_vs_truth: None,
+            capture_seconds: seconds,
             seconds,
             rays: 1.0,
             errors: RelErrors {
