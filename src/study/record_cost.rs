@@ -149,13 +149,22 @@ pub fn record_luminance<W: World>(
     cs: &CacheSettings,
     id: u64,
     progress: &Progress,
-) -> Result<(Taylor2<W::S>, [f64; 2], u64), Cancelled> {
+) -> Result<Sampled<W::S>, Cancelled> {
     let r = compute_record(world, x, out, cs, id, progress)?;
-    Ok((
-        r.payload(Cached::Scattered).luminance(),
-        [r.seconds, r.capture_seconds],
-        r.rays,
-    ))
+    Ok(Sampled {
+        luminance: r.payload(Cached::Scattered).luminance(),
+        seconds: r.seconds,
+        capture_seconds: r.capture_seconds,
+        rays: r.rays,
+    })
+}
+
+/// One record as [`record_luminance`] sees it.
+pub struct Sampled<S: Space> {
+    pub luminance: Taylor2<S>,
+    pub seconds: f64,
+    pub capture_seconds: f64,
+    pub rays: u64,
 }
 
 /// Squared distances of `a` from `b` in value, gradient and Hessian.
@@ -198,7 +207,7 @@ pub fn reference<W: World>(
     for b in 0..batches {
         let mut c = cs.clone();
         c.seed = cs.seed.wrapping_add(1000 + b as u64);
-        runs.push(record_luminance(world, x, out, &c, id, progress)?.0);
+        runs.push(record_luminance(world, x, out, &c, id, progress)?.luminance);
     }
     let k = 1.0 / batches as f64;
     let mut mean = runs[0];
@@ -239,14 +248,14 @@ pub fn measure<W: World>(
     for k in 0..seeds {
         let mut c = c0.clone();
         c.seed = cs.seed.wrapping_add(k as u64);
-        let (t, s, r) = record_luminance(world, x, out, &c, id, progress)?;
-        for (a, d) in sq.iter_mut().zip(squared_diff(&t, &reference.mean)) {
+        let r = record_luminance(world, x, out, &c, id, progress)?;
+        for (a, d) in sq.iter_mut().zip(squared_diff(&r.luminance, &reference.mean)) {
             *a += d;
         }
-        grads.push(t.grad);
-        seconds += s[0];
-        capture += s[1];
-        rays += r;
+        grads.push(r.luminance.grad);
+        seconds += r.seconds;
+        capture += r.capture_seconds;
+        rays += r.rays;
     }
     let gradient_vs_truth = truth.map(|t| {
         let norm = W::S::length(t.gradient).max(f64::MIN_POSITIVE);
