@@ -1,4 +1,4 @@
-//! `volcache figure gradients` and `volcache bench derivatives`, end to end with tiny
+//! `volcache figure gradients`, `volcache bench derivatives` and `volcache bench records`, end to end with tiny
 //! settings: the outputs exist, the JSON holds finite numbers for every method, and
 //! the same seed gives the same numbers.
 
@@ -158,4 +158,51 @@ fn bench_derivatives_writes_json() {
     // The capture is shared: the same rays for every method at one N.
     assert_eq!(rows[0]["rays_traced"], rows[2]["rays_traced"]);
     assert_eq!(j["points"].as_array().unwrap().len(), 1);
+}
+
+/// `bench records`, 2D and 3D, tiny: the JSON holds finite errors for every
+/// variant and point, the baseline's efficiency is one, the truth's errors are
+/// there when asked for, and a malformed variant is refused by name.
+#[test]
+fn bench_records_writes_json() {
+    let dir = tempfile::tempdir().unwrap();
+    for (scene, reference, variants, truth) in [
+        ("flatland_scenes/shaded_lamp.json", "512x8", "128x8,64x8g0", true),
+        ("scenes3d/lamp_fog.json", "256x4", "64x4,64x2", false),
+    ] {
+        let path = dir.path().join("records.json");
+        let mut cmd = volcache();
+        cmd.args(["bench", "records", scene, "--points", "2", "--seeds", "2"])
+            .args(["--reference", reference, "--variants", variants])
+            .args(["--out", path.to_str().unwrap()]);
+        if truth {
+            cmd.args(["--truth-spp", "2000", "--truth-batches", "2"]);
+        }
+        let out = cmd.output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let j: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+        let summary = j["summary"].as_array().unwrap();
+        assert_eq!(summary.len(), 2);
+        for k in ["value", "gradient", "hessian"] {
+            assert_eq!(summary[0]["efficiency"][k].as_f64(), Some(1.0), "{scene}");
+        }
+        let share = summary[0]["capture_share"].as_f64().unwrap();
+        assert!(share > 0.0 && share <= 1.0, "{scene}: capture share {share}");
+        for p in j["points"].as_array().unwrap() {
+            for c in p["costs"].as_array().unwrap() {
+                for k in ["value", "gradient", "hessian"] {
+                    let e = c["errors"][k].as_f64().unwrap();
+                    assert!(e.is_finite() && e >= 0.0, "{scene}: {c}");
+                }
+                assert_eq!(c.get("gradient_vs_truth").is_some(), truth, "{scene}: {c}");
+            }
+        }
+    }
+    let out = volcache()
+        .args(["bench", "records", "--variants", "128by8"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("128by8") && err.contains("RAYSxSTEPS"), "{err}");
 }
