@@ -217,23 +217,6 @@ pub fn sample_at<W: World>(
     parts.scaled(prefactor)
 }
 
-/// [`sample_at`] (no prefactor) whose lobe-sampled path is followed with
-/// probability `keep_path` and weighted 1/`keep_path` when it is (Russian roulette
-/// of the expensive part; the light samples are always taken).
-#[allow(clippy::too_many_arguments)] // the vertex state is spelled out
-pub fn sample_at_rouletted<W: World>(
-    world: &W,
-    x: VecOf<W>,
-    lobe: &Lobe<W::S>,
-    skip: Option<u32>,
-    keep_path: f64,
-    settings: &Settings,
-    s: &mut Sampler,
-    rays: &mut u64,
-) -> Parts {
-    sample_at_each(world, x, lobe, skip, keep_path, settings, s, rays, &mut ignore).0
-}
-
 /// [`sample_at`] without the prefactor, showing its parts: `each` sees every light
 /// sample's direction and share, and the lobe-sampled path comes back as its
 /// direction and what it brought (weight · L), if the lobe drew one and the path

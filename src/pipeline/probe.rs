@@ -31,9 +31,9 @@
 use super::dim::Dim;
 use super::lobe::Lobe;
 use super::medium::Region;
-use super::path::{ScatteredSample, Settings, radiance_leaving, sample_at_rouletted, scattered_with_slope};
+use super::path::{ScatteredSample, Settings, radiance_leaving, sample_at_each, scattered_with_slope};
 use super::silhouette::{RayEnd, find_edges};
-use super::world::{DirectLight, Hit, World};
+use super::world::{DirectLight, Hit, World, ignore};
 use crate::core::color::Rgb;
 pub use crate::core::phase::Outgoing;
 use crate::core::rng::{Sampler, mix64};
@@ -528,7 +528,9 @@ fn trace_field<W: World>(
                         sum = sum * m.sigma_s / paths as f64;
                     } else if m.contains(p) {
                         for _ in 0..paths {
-                            sum += sample_at_rouletted(world, p, &lobe, None, keep, &ps.settings, &mut s, &mut rays)
+                            let each = &mut ignore;
+                            sum += sample_at_each(world, p, &lobe, None, keep, &ps.settings, &mut s, &mut rays, each)
+                                .0
                                 .total();
                         }
                         sum = sum * m.sigma_s / paths as f64;
