@@ -82,10 +82,11 @@ pub struct ProbeSettings {
     /// rays, which the aware derivatives take for an edge.
     /// Unbiased; c = 0 (the default) turns it off, and an isotropic phase (q = 1)
     /// never draws. Measured (`volcache bench records`, c = 1, records' error
-    /// against a converged record): in 2D it saves 14% (forest.json, g = 0.3) to
-    /// 60% (shaded_lamp.json, g = 0.85) of the rays at equal or lower error per
-    /// second, but in 3D (lamp_fog.json, g = 0.8) the gradient of dim points
-    /// deep in the fog grows noisier than the 37% of rays saved pay for: opt-in.
+    /// against a converged record, records/s at equal error for value, gradient
+    /// and Hessian): shaded_lamp.json (g = 0.85) 52% of the rays saved, 1.20×,
+    /// 1.37×, 1.21×; forest.json (g = 0.3) 11% saved, 0.96×, 0.98×, 1.39×; 3D
+    /// lamp_fog.json (g = 0.8) 37% saved, 1.7× in value but 0.4× in gradient (dim
+    /// points deep in the fog). Hence opt-in.
     /// Only for a light field that serves one ω_o (not harmonic moments, not a
     /// surface's irradiance).
     pub phase_roulette: f64,
@@ -603,11 +604,11 @@ fn trace_field<W: World>(
 /// ([`ProbeSettings::phase_roulette`]).
 const UNROULETTED_SAMPLES: usize = 2;
 
-/// The probability q with which a ray at a medium point keeps its recursive
-/// estimates ([`ProbeSettings::phase_roulette`]): min(1, c·f/f̄), f the phase of the
+/// The probability q with which a ray's medium samples follow their phase-sampled
+/// paths ([`ProbeSettings::phase_roulette`]): min(1, c·f/f̄), f the phase of the
 /// medium at x scattering the ray's light (arriving along −`dir`) into ω_o. One
 /// without a medium at x, without `importance`, or for c ≤ 0. At least 1e-3, so a
-/// kept estimate's weight stays bounded (g → 1).
+/// followed path's weight 1/q stays bounded (g → 1).
 fn keep_probability<W: World>(
     at_x: Option<&super::medium::Medium<W::S, W::Region>>,
     importance: Option<<W::S as Space>::Vec>,
