@@ -3,9 +3,10 @@
 //! ([`volcache::study::record_cost`]). 2D and 3D scenes alike.
 //!
 //! Points: `--points` uniform random points (fixed seed) in the scene's medium —
-//! the 2D domain, or the 3D scene's bounds. ω_o: the 2D field's, or towards the 3D
-//! camera. Settings: the library's record defaults with the scene's path depth,
-//! `--direct-samples` and the variant's directions and steps.
+//! the 2D domain, or the 3D scene's bounds (a point inside a closed object is not
+//! excluded; none of the committed results has one). ω_o: the 2D field's, or
+//! towards the 3D camera. Settings: the library's record defaults with the
+//! scene's path depth, `--direct-samples` and the variant's directions and steps.
 
 use super::common::{AnyScene, load_any_scene, scene_stem};
 use clap::Args;
