@@ -280,7 +280,7 @@ pub fn measure<W: World>(
 
 /// A variant over all points: mean seconds and rays per record, the mean over
 /// points of each squared relative error (as its root), and the efficiency
-/// against `baseline` (None for the baseline itself).
+/// against the baseline (one for the baseline itself).
 #[derive(Clone, Debug, Serialize)]
 pub struct VariantSummary {
     pub variant: Variant,
@@ -297,7 +297,11 @@ pub struct VariantSummary {
 }
 
 /// Summaries of `costs[v][p]` (variant v, point p); variant 0 is the baseline.
+/// Nothing without variants.
 pub fn summarise(variants: &[Variant], costs: &[Vec<PointCost>]) -> Vec<VariantSummary> {
+    if costs.is_empty() {
+        return Vec::new();
+    }
     let stats = |pc: &[PointCost]| {
         let n = pc.len().max(1) as f64;
         let secs = pc.iter().map(|c| c.seconds).sum::<f64>() / n;
