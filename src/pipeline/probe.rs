@@ -83,8 +83,8 @@ pub struct ProbeSettings {
     /// Unbiased; c = 0 (the default) turns it off, and an isotropic phase (q = 1)
     /// never draws. Measured (`volcache bench records`, c = 1, records' error
     /// against a converged record, records/s at equal error for value, gradient
-    /// and Hessian): shaded_lamp.json (g = 0.85) 52% of the rays saved, 1.20×,
-    /// 1.37×, 1.21×; forest.json (g = 0.3) 11% saved, 0.96×, 0.98×, 1.39×; 3D
+    /// and Hessian): shaded_lamp.json (g = 0.85) 52% of the rays saved, 1.31×,
+    /// 1.43×, 1.47×; forest.json (g = 0.3) 11% saved, 0.94×, 0.99×, 1.10×; 3D
     /// lamp_fog.json (g = 0.8) 37% saved, 1.7× in value but 0.4× in gradient (dim
     /// points deep in the fog). Hence opt-in.
     /// Only for a light field that serves one ω_o (not harmonic moments, not a
