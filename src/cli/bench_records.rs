@@ -127,10 +127,9 @@ impl Plan<'_> {
         points: &[VecOf<W>],
         out: impl Fn(VecOf<W>) -> Outgoing<VecOf<W>>,
         coords: impl Fn(VecOf<W>) -> Vec<f64>,
-    ) -> Result<(Vec<PointReport>, Vec<Vec<PointCost>>), Cancelled> {
+    ) -> Result<Vec<PointReport>, Cancelled> {
         let progress = Progress::new();
         let mut reports = Vec::new();
-        let mut by_variant = vec![Vec::new(); self.variants.len()];
         for (k, &x) in points.iter().enumerate() {
             let id = k as u64;
             let r = reference(
@@ -151,7 +150,7 @@ impl Plan<'_> {
                 eprintln!("  finite-difference gradient noise {:.1}%", 100.0 * t.noise);
             }
             let mut costs = Vec::new();
-            for (v, &variant) in self.variants.iter().enumerate() {
+            for &variant in self.variants {
                 let mut cs = self.cs.clone();
                 if let Some(c) = self.a.phase_roulette {
                     cs.probe.phase_roulette = c;
@@ -168,7 +167,6 @@ impl Plan<'_> {
                     truth.as_ref(),
                     &progress,
                 )?;
-                by_variant[v].push(c.clone());
                 costs.push(c);
             }
             eprintln!(
@@ -185,11 +183,12 @@ impl Plan<'_> {
                 costs,
             });
         }
-        Ok((reports, by_variant))
+        Ok(reports)
     }
 }
 
-/// `n` points uniform in [lo, hi] (per axis) where `keep` holds, from a fixed stream.
+/// The first `n` points drawn by `draw` where `keep` holds (at most 1000·n draws),
+/// from a fixed stream.
 fn random_points<V: Copy>(n: usize, seed: u64, draw: impl Fn(&mut Sampler) -> V, keep: impl Fn(V) -> bool) -> Vec<V> {
     let mut s = Sampler::new2(seed, 0x2EC0, 0);
     let mut out = Vec::new();
@@ -226,7 +225,7 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/bench_records_{stem}.json")));
     let cancelled = |_| anyhow::Error::from(Cancelled);
-    let (reports, costs) = match &scene {
+    let reports = match &scene {
         AnyScene::Flat(s) => {
             let fp = volcache::flatland::field::FieldParams::from_scene(s);
             let mut cs = CacheSettings::new::<D2>(CacheMethod::Ours, 1.0, fp.settings);
@@ -278,6 +277,10 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
                 .map_err(cancelled)?
         }
     };
+    // Per variant, its costs at every point.
+    let costs: Vec<Vec<PointCost>> = (0..variants.len())
+        .map(|v| reports.iter().map(|p| p.costs[v].clone()).collect())
+        .collect();
     let summary = summarise(&variants, &costs);
     println!(
         "records of ours, {stem}: {} points × {} seeds, reference {} × {} batches, {} threads",
