@@ -10,7 +10,7 @@ use volcache::core::space::{D2, D3};
 use volcache::core::taylor::Taylor2;
 use volcache::pipeline::derivatives::{AwareSettings, aware, element_contribution, unaware};
 use volcache::pipeline::probe::{LightField, Outgoing, ProbeSettings, capture};
-use volcache::pipeline::proxy::{ElementKind, RadianceRule, build};
+use volcache::pipeline::proxy::{ElementKind, RadianceRule, build, elements};
 use volcache::progress::Progress;
 
 const SIGMA_S: f64 = 1e-6;
@@ -125,9 +125,9 @@ fn proxy_closes_and_capture_does_not_depend_on_threads<F: Fixture>() {
         ..ProbeSettings::default_for::<F>()
     };
     let lf = with_threads(2, || probe::<F>(&s, x, &ps, 4));
-    let elements = build(&lf, RadianceRule::Farther);
+    let proxy = build(&lf, RadianceRule::Farther);
     let mut sum = 0.0;
-    for e in elements.iter().filter(|e| e.kind == ElementKind::Surface) {
+    for e in proxy.elements.iter().filter(|e| e.kind == ElementKind::Surface) {
         let f = F::form_factor(e.v, x).value;
         assert!(f > 0.0, "{}D: element {e:?} has form factor {f}", F::DIM);
         sum += f;
@@ -138,7 +138,7 @@ fn proxy_closes_and_capture_does_not_depend_on_threads<F: Fixture>() {
         "{}D: Σ form factors = {sum}",
         F::DIM
     );
-    let aw = with_threads(2, || aware(&lf, &elements, &AwareSettings::default()));
+    let aw = with_threads(2, || aware(&lf, &proxy, &AwareSettings::default()));
     let lf1 = with_threads(1, || probe::<F>(&s, x, &ps, 4));
     assert_eq!(lf.rays, lf1.rays);
     assert_eq!(lf.simplices, lf1.simplices);
@@ -178,15 +178,22 @@ fn medium_samples_summed_once_agree_with_the_pieces<F: Fixture>() {
     let settings = AwareSettings::default();
     for seed in 4..8 {
         let lf = probe::<F>(&s, x, &ps, seed);
-        let elements = build(&lf, RadianceRule::Farther);
-        let shared = elements
-            .iter()
-            .filter(|e| e.kind == ElementKind::Medium && !e.bridging)
-            .count();
+        let proxy = build(&lf, RadianceRule::Farther);
+        let all = elements(&lf, RadianceRule::Farther);
+        assert_eq!(all.len(), proxy.count);
+        let shared = all.len() - proxy.elements.len();
         assert!(shared > 0, "{}D: no shell piece to share samples", F::DIM);
-        let once = aware(&lf, &elements, &settings).multiple.luminance();
+        assert_eq!(
+            shared,
+            all.iter()
+                .filter(|e| e.kind == ElementKind::Medium && !e.bridging)
+                .count(),
+            "{}D: the proxy stores every element but the non-bridging shell pieces",
+            F::DIM
+        );
+        let once = aware(&lf, &proxy, &settings).multiple.luminance();
         let mut per_piece = Taylor2::<F>::zero();
-        for e in elements
+        for e in all
             .iter()
             .filter(|e| e.kind == ElementKind::Medium && e.radiance != Rgb::ZERO)
         {

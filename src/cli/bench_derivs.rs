@@ -184,8 +184,8 @@ pub fn run(b: DerivBench) -> anyhow::Result<ExitCode> {
             let plain = time_eval(min_s, || derivatives::plain_estimate(&lf));
             let unaware = time_eval(min_s, || derivatives::unaware(&lf));
             let build = time_eval(min_s, || proxy::build(&lf, aw.rule));
-            let elements = proxy::build(&lf, aw.rule);
-            let aware_only = time_eval(min_s, || derivatives::aware(&lf, &elements, &aw));
+            let proxy = proxy::build(&lf, aw.rule);
+            let aware_only = time_eval(min_s, || derivatives::aware(&lf, &proxy, &aw));
             samples.push(Sample {
                 point: x.to_array(),
                 rays_per_light_field: n,
@@ -193,7 +193,7 @@ pub fn run(b: DerivBench) -> anyhow::Result<ExitCode> {
                 capture_seconds,
                 eval_seconds: [plain, unaware, build + aware_only],
                 proxy_build_seconds: build,
-                elements: elements.len(),
+                elements: proxy.count,
             });
         }
     }

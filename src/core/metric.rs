@@ -40,14 +40,13 @@ impl CacheMethod {
 
 /// The radiance added to every proxy element before the metric's Hessian is taken
 /// (theory.md §7, Schwarzhaupt et al. 2012): `fraction` × the elements' mean
-/// radiance, or unit radiance when every element is black (a purely geometric
+/// radiance (the sum of the `n` elements' radiance over n), or unit radiance when every element is black (a purely geometric
 /// Hessian). None when nothing is to be added.
-pub fn hessian_radiance_floor(radiances: impl ExactSizeIterator<Item = Rgb>, fraction: f64) -> Option<Rgb> {
-    let n = radiances.len();
+pub fn hessian_radiance_floor(radiance_sum: Rgb, n: usize, fraction: f64) -> Option<Rgb> {
     if n == 0 || fraction <= 0.0 {
         return None;
     }
-    let mean = radiances.sum::<Rgb>() / n as f64;
+    let mean = radiance_sum / n as f64;
     Some(if mean == Rgb::ZERO { Rgb::ONE } else { mean * fraction })
 }
 

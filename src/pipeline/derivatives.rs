@@ -12,7 +12,7 @@
 use super::dim::Dim;
 use super::path::{Estimate, Parts, Query, Settings, estimate};
 use super::probe::{Angular, LightField, MediumSample, Outgoing};
-use super::proxy::{Element, ElementKind, RadianceRule};
+use super::proxy::{Element, ElementKind, Proxy, RadianceRule};
 use super::slide;
 use super::world::{DirectLight, World};
 use crate::core::color::Rgb;
@@ -392,8 +392,8 @@ fn smoothed_kernel<S: Dim>(
 pub(super) const SUM_CHUNK: usize = 2048;
 
 /// Ours: value, gradient and Hessian of L_s from the proxy elements.
-pub fn aware<S: Dim>(lf: &LightField<S>, elements: &[Element<S>], settings: &AwareSettings) -> PartDerivs<S> {
-    aware_with_floor(lf, elements, settings, 0.0).0
+pub fn aware<S: Dim>(lf: &LightField<S>, proxy: &Proxy<S>, settings: &AwareSettings) -> PartDerivs<S> {
+    aware_with_floor(lf, proxy, settings, 0.0).0
 }
 
 /// [`aware`], and the same with [`hessian_radiance_floor`]`(floor_fraction)` added
@@ -410,11 +410,11 @@ pub fn aware<S: Dim>(lf: &LightField<S>, elements: &[Element<S>], settings: &Awa
 /// per piece; its smoothing distance is the pieces' sizes averaged by share.
 pub fn aware_with_floor<S: Dim>(
     lf: &LightField<S>,
-    elements: &[Element<S>],
+    proxy: &Proxy<S>,
     settings: &AwareSettings,
     floor_fraction: f64,
 ) -> (PartDerivs<S>, Option<PartDerivs<S>>) {
-    let (plain, floored, _) = aware_with_noise(lf, elements, settings, floor_fraction);
+    let (plain, floored, _) = aware_with_noise(lf, proxy, settings, floor_fraction);
     (plain, floored)
 }
 
@@ -423,19 +423,19 @@ pub fn aware_with_floor<S: Dim>(
 /// the bridging elements' shares are not counted).
 pub fn aware_with_noise<S: Dim>(
     lf: &LightField<S>,
-    elements: &[Element<S>],
+    proxy: &Proxy<S>,
     settings: &AwareSettings,
     floor_fraction: f64,
 ) -> (PartDerivs<S>, Option<PartDerivs<S>>, f64) {
     let clamp = settings.medium_clamp;
-    let floor = hessian_radiance_floor(elements.iter().map(|e| e.radiance), floor_fraction);
-    let gathered = |e: &Element<S>| e.kind == ElementKind::Medium && !e.bridging;
-    let shares = SampleShares::gather(lf, elements.iter().filter(|e| gathered(e)));
-    let element_sums: Vec<Sums<S>> = elements
-        .par_chunks(SUM_CHUNK)
+    let floor = hessian_radiance_floor(proxy.radiance_sum, proxy.count, floor_fraction);
+    let shares = &proxy.shares;
+    let element_sums: Vec<Sums<S>> = proxy
+        .chunks(SUM_CHUNK)
+        .into_par_iter()
         .map(|chunk| {
             let mut sums = Sums::default();
-            for e in chunk.iter().filter(|e| !gathered(e)) {
+            for e in chunk {
                 if e.radiance != Rgb::ZERO {
                     sums.add(e.kind, false, element_contribution(lf, e, clamp));
                 }
@@ -560,45 +560,6 @@ impl<S: Dim> std::ops::AddAssign for Sums<S> {
         self.multiple += o.multiple;
         self.floored_single += o.floored_single;
         self.floored_multiple += o.floored_multiple;
-    }
-}
-
-/// Each medium sample's share of the measure of the non-bridging shell pieces it
-/// is a vertex of, and their sizes weighted by share (see [`aware_with_floor`]).
-pub(super) struct SampleShares {
-    /// Where each ray's samples start in `measure` and `size`.
-    first: Vec<usize>,
-    measure: Vec<f64>,
-    size: Vec<f64>,
-}
-
-impl SampleShares {
-    pub(super) fn gather<'a, S: Dim>(lf: &LightField<S>, pieces: impl Iterator<Item = &'a Element<S>>) -> Self {
-        let mut first = Vec::with_capacity(lf.rays.len() + 1);
-        let mut n = 0;
-        for r in &lf.rays {
-            first.push(n);
-            n += r.samples.len();
-        }
-        first.push(n);
-        let (mut measure, mut size) = (vec![0.0; n], vec![0.0; n]);
-        for e in pieces {
-            let (share, shell) = (e.dir_measure / S::DIM as f64, e.shell.expect("a shell piece") as usize);
-            let sized = share * e.size();
-            for &j in e.rays.as_ref() {
-                let k = first[j as usize] + shell;
-                measure[k] += share;
-                size[k] += sized;
-            }
-        }
-        SampleShares { first, measure, size }
-    }
-
-    /// Sample i of ray j's measure and mean piece size, if it has a share.
-    pub(super) fn of(&self, j: usize, i: usize) -> Option<(f64, f64)> {
-        let k = self.first[j] + i;
-        let m = self.measure[k];
-        (m > 0.0).then(|| (m, self.size[k] / m))
     }
 }
 

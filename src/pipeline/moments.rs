@@ -27,10 +27,9 @@ use super::derivatives::{AwareSettings, PartDerivs, with_values};
 use super::dim::Dim;
 use super::moments_sum::{arriving_travel, aware_moments, unaware_moments};
 use super::probe::{Angular, LightField};
-use super::proxy::Element;
+use super::proxy::Proxy;
 use crate::core::color::Rgb;
 use crate::core::harmonics::{basis, phase_weights};
-use crate::core::metric::CacheMethod;
 use crate::core::phase::{hg_of_mu, phase_taylor_fixed_direction, phase_taylor_out};
 use crate::core::space::Space;
 use crate::core::taylor::Taylor2;
@@ -108,21 +107,20 @@ fn basis_at<S: Space>(k: usize, d: S::Vec) -> f64 {
 }
 
 /// The method's value and derivatives of every moment of bands 0..=`bands`, per
-/// part: ours' aware derivatives (`elements` is the proxy) or Jarosz 2008's, each
+/// part: ours' aware derivatives (from its `proxy`) or Jarosz 2008's (no proxy), each
 /// with the plain estimate as its value, as a record's payload is made. The light
 /// field is left as it was given.
 pub fn moment_derivs<S: Dim>(
     lf: &mut LightField<S>,
-    method: CacheMethod,
-    elements: &[Element<S>],
+    proxy: Option<&Proxy<S>>,
     settings: &AwareSettings,
     bands: usize,
 ) -> Vec<PartDerivs<S>> {
     // Jarosz 2008's sums, whose values are the plain estimates (a record's values).
     let plain = unaware_moments(lf, bands);
-    match method {
-        CacheMethod::Jarosz08 => plain,
-        CacheMethod::Ours => aware_moments(lf, elements, settings, bands)
+    match proxy {
+        None => plain,
+        Some(proxy) => aware_moments(lf, proxy, settings, bands)
             .into_iter()
             .zip(&plain)
             .map(|(parts, p)| with_values(parts, [p.direct.value(), p.single.value(), p.multiple.value()]))

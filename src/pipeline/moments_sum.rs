@@ -9,12 +9,12 @@
 //! summed per basis function by the phase path's own functions.
 
 use super::derivatives::{
-    AwareSettings, HESSIAN_SCALE_REACH, RAY_CHUNK, SUM_CHUNK, SampleShares, direct_derivatives, element_contribution,
+    AwareSettings, HESSIAN_SCALE_REACH, RAY_CHUNK, SUM_CHUNK, direct_derivatives, element_contribution,
     element_incident, turning,
 };
 use super::dim::Dim;
 use super::probe::{Angular, LightField};
-use super::proxy::{Element, ElementKind};
+use super::proxy::{Element, ElementKind, Proxy};
 use crate::core::color::Rgb;
 use crate::core::distance::{Offset, direction_along_from, distance};
 use crate::core::element::{medium_form_factor_smoothed, medium_softening, near_distance};
@@ -46,13 +46,13 @@ fn bases<S: Dim>(bands: usize, x: S::Vec, c: S::Vec, soft: f64) -> Vec<Taylor2<S
 /// sums', not the plain estimate's). `lf.angular` is used and left as given.
 pub fn aware_moments<S: Dim>(
     lf: &mut LightField<S>,
-    elements: &[Element<S>],
+    proxy: &Proxy<S>,
     settings: &AwareSettings,
     bands: usize,
 ) -> Vec<PartDerivs<S>> {
     let kept = lf.angular;
     let clamp = settings.medium_clamp;
-    let gathered = |e: &Element<S>| e.kind == ElementKind::Medium && !e.bridging;
+    let chunks = proxy.chunks(SUM_CHUNK);
     // Surfaces that are no occlusion boundary: T L F at the anchor times the
     // angular factor there (`element_contribution`'s plain case), F and T once.
     let plain_surface = |e: &Element<S>| e.kind == ElementKind::Surface && e.far_plane.is_none();
@@ -60,11 +60,11 @@ pub fn aware_moments<S: Dim>(
         .map(|k| {
             lf.angular = Angular::Moment(k);
             let lf = &*lf;
-            let sums: Vec<(TaylorRgb<S>, TaylorRgb<S>)> = elements
-                .par_chunks(SUM_CHUNK)
+            let sums: Vec<(TaylorRgb<S>, TaylorRgb<S>)> = chunks
+                .par_iter()
                 .map(|chunk| {
                     let (mut single, mut multiple) = (TaylorRgb::default(), TaylorRgb::default());
-                    let per_moment = |e: &&Element<S>| !gathered(e) && !plain_surface(e) && e.radiance != Rgb::ZERO;
+                    let per_moment = |e: &&Element<S>| !plain_surface(e) && e.radiance != Rgb::ZERO;
                     for e in chunk.iter().filter(per_moment) {
                         let c = element_contribution(lf, e, clamp);
                         match e.kind {
@@ -90,8 +90,8 @@ pub fn aware_moments<S: Dim>(
     let lf = &*lf;
     let k_count = out.len();
     let sigma_s = [lf.sigma_s.x, lf.sigma_s.y, lf.sigma_s.z].map(Taylor2::constant);
-    let surface_sums: Vec<Vec<TaylorRgb<S>>> = elements
-        .par_chunks(SUM_CHUNK)
+    let surface_sums: Vec<Vec<TaylorRgb<S>>> = chunks
+        .par_iter()
         .map(|chunk| {
             let mut sums = vec![TaylorRgb::<S>::default(); k_count];
             for e in chunk.iter().filter(|e| plain_surface(e) && e.radiance != Rgb::ZERO) {
@@ -111,7 +111,7 @@ pub fn aware_moments<S: Dim>(
             p.single += c;
         }
     }
-    let shares = SampleShares::gather(lf, elements.iter().filter(|e| gathered(e)));
+    let shares = &proxy.shares;
     let sample_sums: Vec<Vec<TaylorRgb<S>>> = lf
         .rays
         .par_chunks(RAY_CHUNK)

@@ -145,8 +145,107 @@ fn centroid<S: Dim>(v: impl Iterator<Item = (S::Vec, Rgb)>) -> (S::Vec, Rgb) {
     (c / n, l / n)
 }
 
+/// The proxy as the derivatives sum it. The shell pieces that bridge no occluder
+/// (most of a proxy: 40k of 44k on lamp_fog at 4,096 rays × 24 steps) are summed
+/// per medium sample ([`SampleShares`]), so they are folded into the samples'
+/// shares as they are made instead of being stored: storing them (≈ 200 bytes
+/// each in 3D) and reading them back cost more than making them.
+#[derive(Clone, Debug)]
+pub struct Proxy<S: Dim> {
+    /// The elements summed one by one: surfaces and bridging shell pieces, in the
+    /// build order of [`elements`].
+    pub elements: Vec<Element<S>>,
+    /// Each of `elements`' index in the build order of [`elements`] (see
+    /// [`Proxy::chunks`]).
+    order: Vec<usize>,
+    /// Each medium sample's share of the shell pieces not stored.
+    pub shares: SampleShares,
+    /// How many elements there are in all, and the sum of their radiance in build
+    /// order (the Hessian floor's mean, [`crate::core::metric::hessian_radiance_floor`]).
+    pub count: usize,
+    pub radiance_sum: Rgb,
+}
+
+impl<S: Dim> Proxy<S> {
+    /// The stored elements in groups of the build order's consecutive runs of
+    /// `size` (empty groups included): a sum made per group and the groups' sums
+    /// added in order is the same, bit for bit, as one made over the full list in
+    /// chunks of `size` skipping the shell pieces, whatever the thread count.
+    pub fn chunks(&self, size: usize) -> Vec<&[Element<S>]> {
+        let bound = |c: usize| self.order.partition_point(|&i| i < c * size);
+        (0..self.count.div_ceil(size))
+            .map(|c| &self.elements[bound(c)..bound(c + 1)])
+            .collect()
+    }
+}
+
 /// Build the proxy of a light field.
-pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> {
+pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Proxy<S> {
+    let mut p = Proxy {
+        elements: Vec::new(),
+        order: Vec::new(),
+        shares: SampleShares::new(lf),
+        count: 0,
+        radiance_sum: Rgb::ZERO,
+    };
+    for_each_element(lf, rule, |piece| {
+        match piece {
+            Piece::Element(e) => {
+                p.radiance_sum += e.radiance;
+                p.elements.push(e);
+                p.order.push(p.count);
+            }
+            Piece::Shared(s) => {
+                // The element's radiance and size as `make` and `Element::size` give
+                // them, without the element.
+                let v = s.v.as_ref();
+                p.radiance_sum += v.iter().fold(Rgb::ZERO, |l, q| l + q.2) / v.len() as f64;
+                let mut size = 0.0f64;
+                for i in 0..v.len() {
+                    for j in i + 1..v.len() {
+                        size = size.max(S::length(v[j].0 - v[i].0));
+                    }
+                }
+                p.shares.add::<S>(s.rays.as_ref(), s.shell, s.dir_measure, size);
+            }
+        }
+        p.count += 1;
+    });
+    p
+}
+
+/// Every element of the proxy of a light field, in build order (what the app
+/// draws; [`build`] keeps only those summed one by one).
+pub fn elements<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> {
+    let mut out = Vec::with_capacity(lf.simplices.len() * 2);
+    for_each_element(lf, rule, |piece| {
+        out.push(match piece {
+            Piece::Element(e) => e,
+            Piece::Shared(s) => {
+                let kind = (ElementKind::Medium, false);
+                make(lf.x, s.v, RadianceRule::Average, kind, s.dir_measure, (s.rays, Some(s.shell)))
+            }
+        })
+    });
+    out
+}
+
+/// An element as [`for_each_element`] hands it on: made, or (a shell piece that
+/// bridges no occluder, summed per medium sample) only its vertices.
+enum Piece<S: Dim> {
+    Element(Element<S>),
+    Shared(SharedPiece<S>),
+}
+
+struct SharedPiece<S: Dim> {
+    v: S::Simplex<Vertex<S>>,
+    rays: S::Simplex<u32>,
+    shell: u32,
+    dir_measure: f64,
+}
+
+/// Make the proxy's elements, surfaces first, and hand each to `sink`.
+fn for_each_element<S: Dim>(lf: &LightField<S>, rule: RadianceRule, mut sink: impl FnMut(Piece<S>)) {
     let x = lf.x;
     let ends: Vec<Vertex<S>> = lf
         .rays
@@ -161,7 +260,6 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
             }
         })
         .collect();
-    let mut out = Vec::with_capacity(lf.simplices.len() * 2);
     let measure = |t: &S::Simplex<u32>| S::direction_measure(S::simplex(|k| lf.rays[t.as_ref()[k] as usize].dir));
     for t in &lf.simplices {
         let mut v: S::Simplex<Vertex<S>> = S::simplex(|k| ends[t.as_ref()[k] as usize]);
@@ -220,7 +318,7 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
                 .as_ref()
                 .map(|h| (v.as_ref()[far].0, h.normal));
         }
-        out.push(e);
+        sink(Piece::Element(e));
     }
     let shells = lf.rays.iter().map(|r| r.samples.len()).max().unwrap_or(0);
     for t in &lf.simplices {
@@ -229,14 +327,14 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
             // Each vertex's sample of shell i, where its ray reaches that far.
             let mut samples = [None; 3];
             for (s, &j) in samples.iter_mut().zip(t.as_ref()) {
-                *s = lf.medium_sample(j as usize, i);
+                *s = lf.medium_point(j as usize, i);
             }
             let present: S::Simplex<bool> = S::simplex(|k| samples[k].is_some());
             if !present.as_ref().iter().any(|&p| p) {
                 continue;
             }
-            let v: S::Simplex<Vertex<S>> = S::simplex(|k| match &samples[k] {
-                Some(m) => (m.at, m.depth, m.light, m.at),
+            let v: S::Simplex<Vertex<S>> = S::simplex(|k| match samples[k] {
+                Some((at, depth, light, _)) => (at, depth, light, at),
                 None => {
                     let e = ends[t.as_ref()[k] as usize];
                     (e.0, e.1, Rgb::ZERO, e.3)
@@ -245,21 +343,69 @@ pub fn build<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S>> 
             if v.as_ref().iter().all(|e| e.2 == Rgb::ZERO) {
                 continue; // outside the medium region: nothing to carry
             }
-            let bridging = !present.as_ref().iter().all(|&p| p);
-            let kind = (ElementKind::Medium, bridging);
-            let mut e = make(x, v, RadianceRule::Average, kind, omega, (*t, Some(i as u32)));
-            if bridging {
-                // See the module docs: the samples' sum over the vertex count.
-                let (mut c, mut l, mut m) = (S::zero(), Rgb::ZERO, 0.0);
-                for (p, _) in v.as_ref().iter().zip(present.as_ref()).filter(|(_, p)| **p) {
-                    c += p.3;
-                    l += p.2;
-                    m += 1.0;
-                }
-                (e.anchor, e.radiance) = (c / m, l / S::DIM as f64);
+            if present.as_ref().iter().all(|&p| p) {
+                let (rays, shell, dir_measure) = (*t, i as u32, omega);
+                sink(Piece::Shared(SharedPiece { v, rays, shell, dir_measure }));
+                continue;
             }
-            out.push(e);
+            let kind = (ElementKind::Medium, true);
+            let mut e = make(x, v, RadianceRule::Average, kind, omega, (*t, Some(i as u32)));
+            // See the module docs: the samples' sum over the vertex count.
+            let (mut c, mut l, mut m) = (S::zero(), Rgb::ZERO, 0.0);
+            for (p, _) in v.as_ref().iter().zip(present.as_ref()).filter(|(_, p)| **p) {
+                c += p.3;
+                l += p.2;
+                m += 1.0;
+            }
+            (e.anchor, e.radiance) = (c / m, l / S::DIM as f64);
+            sink(Piece::Element(e));
         }
     }
-    out
+}
+
+/// Each medium sample's share of the measure of the non-bridging shell pieces it
+/// is a vertex of, and their sizes weighted by share (see
+/// [`super::derivatives::aware_with_floor`]).
+#[derive(Clone, Debug)]
+pub struct SampleShares {
+    /// Where each ray's samples start in `measure` and `size`.
+    first: Vec<usize>,
+    measure: Vec<f64>,
+    size: Vec<f64>,
+}
+
+impl SampleShares {
+    fn new<S: Dim>(lf: &LightField<S>) -> Self {
+        let mut first = Vec::with_capacity(lf.rays.len() + 1);
+        let mut n = 0;
+        for r in &lf.rays {
+            first.push(n);
+            n += r.samples.len();
+        }
+        first.push(n);
+        SampleShares {
+            first,
+            measure: vec![0.0; n],
+            size: vec![0.0; n],
+        }
+    }
+
+    /// Add the shares of a shell piece (its rays, shell, measure of directions and
+    /// longest edge) to its vertices' samples.
+    fn add<S: Dim>(&mut self, rays: &[u32], shell: u32, dir_measure: f64, size: f64) {
+        let share = dir_measure / S::DIM as f64;
+        let sized = share * size;
+        for &j in rays {
+            let k = self.first[j as usize] + shell as usize;
+            self.measure[k] += share;
+            self.size[k] += sized;
+        }
+    }
+
+    /// Sample i of ray j's measure and mean piece size, if it has a share.
+    pub fn of(&self, j: usize, i: usize) -> Option<(f64, f64)> {
+        let k = self.first[j] + i;
+        let m = self.measure[k];
+        (m > 0.0).then(|| (m, self.size[k] / m))
+    }
 }

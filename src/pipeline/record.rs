@@ -230,14 +230,11 @@ pub fn compute_record<W: World>(
     };
     let mut lf = capture(world, x, out, &probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;
     let zero = <W::S as Space>::zero_mat();
-    let elements = match cs.method {
-        CacheMethod::Ours => build(&lf, cs.aware.rule),
-        CacheMethod::Jarosz08 => Vec::new(),
-    };
+    let proxy = (cs.method == CacheMethod::Ours).then(|| build(&lf, cs.aware.rule));
     let mut multiple_grad_var = 0.0;
-    let (parts, metric_hessians) = match cs.method {
-        CacheMethod::Ours => {
-            let (parts, floored, var) = aware_with_noise(&lf, &elements, &cs.aware, cs.hessian_floor);
+    let (parts, metric_hessians) = match &proxy {
+        Some(proxy) => {
+            let (parts, floored, var) = aware_with_noise(&lf, proxy, &cs.aware, cs.hessian_floor);
             multiple_grad_var = var;
             let floored = floored.unwrap_or(parts);
             let lum = |t: crate::core::taylor_rgb::TaylorRgb<W::S>| t.luminance().hess;
@@ -248,12 +245,12 @@ pub fn compute_record<W: World>(
             ];
             (parts, hessians)
         }
-        CacheMethod::Jarosz08 => (unaware(&lf), [zero; 3]),
+        None => (unaware(&lf), [zero; 3]),
     };
     let parts = with_plain_values(parts, &lf);
     let (moments, placed_weights) = match cs.moment_bands {
         Some(bands) => (
-            moment_derivs(&mut lf, cs.method, &elements, &cs.aware, bands),
+            moment_derivs(&mut lf, proxy.as_ref(), &cs.aware, bands),
             weights_towards::<W::S>(lf.g, bands, lf.omega_o),
         ),
         None => (Vec::new(), Vec::new()),

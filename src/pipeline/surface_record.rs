@@ -91,8 +91,7 @@ pub fn compute_surface_record<W: World>(
 fn derive<S: Dim>(lf: &LightField<S>, cs: &CacheSettings) -> (PartDerivs<S>, S::Mat) {
     match cs.method {
         CacheMethod::Ours => {
-            let elements = build(lf, cs.aware.rule);
-            let (parts, floored) = aware_with_floor(lf, &elements, &cs.aware, cs.hessian_floor);
+            let (parts, floored) = aware_with_floor(lf, &build(lf, cs.aware.rule), &cs.aware, cs.hessian_floor);
             (parts, floored.unwrap_or(parts).total().luminance().hess)
         }
         CacheMethod::Jarosz08 => (unaware(lf), S::zero_mat()),
