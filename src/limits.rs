@@ -72,6 +72,9 @@ pub const GRADING: (f64, f64) = (0.0, 30.0);
 /// distance (`--edge-reach`): below 0.01 every record shrinks to the smallest
 /// radius (one per query point); above 100 it limits nothing.
 pub const EDGE_REACH: (f64, f64) = (0.01, 100.0);
+/// `--record-noise`: a relative standard error (below 1e-4 a record would want
+/// millions of directions).
+pub const RECORD_NOISE: (f64, f64) = (1e-4, 10.0);
 /// Error threshold ε of the caches (`--eps`).
 pub const EPS: (f64, f64) = (0.0, 1e30);
 

@@ -2,8 +2,8 @@
 //! Jarosz et al. 2008) or by path tracing, and measure it against a reference.
 
 use super::common::{
-    CACHES_BYTES_PER_PIXEL, ProgressUi, check_count, check_plan, check_range, check_spp, ensure_memory, exr_bytes,
-    load_scene, parse_res, png_bytes, scene_stem, write_outputs,
+    CACHES_BYTES_PER_PIXEL, ProgressUi, RecordNoiseArgs, check_count, check_plan, check_range, check_spp,
+    ensure_memory, exr_bytes, load_scene, parse_res, png_bytes, scene_stem, write_outputs,
 };
 use clap::Args;
 use serde::Serialize;
@@ -65,6 +65,8 @@ pub struct CacheArgs {
     /// anisotropic fog (see `volcache bench records`).
     #[arg(long, default_value_t = 0.0)]
     pub phase_roulette: f64,
+    #[command(flatten)]
+    pub record_noise: RecordNoiseArgs,
     /// Resolution WxH (default: half the scene's render resolution).
     #[arg(long, value_parser = parse_res)]
     pub res: Option<[u32; 2]>,
@@ -115,6 +117,7 @@ pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> C
     cs.direct_samples = a.direct_samples;
     cs.edge_reach = a.edge_reach;
     cs.probe.phase_roulette = a.phase_roulette;
+    cs.record_noise = a.record_noise.target();
     cs
 }
 
@@ -192,6 +195,7 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
         check_range("--edge-reach", k, limits::EDGE_REACH)?;
     }
     check_range("--phase-roulette", a.phase_roulette, (0.0, 100.0))?;
+    a.record_noise.check()?;
     ensure_memory(fp.width * fp.height, CACHES_BYTES_PER_PIXEL, "the field")
 }
 

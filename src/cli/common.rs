@@ -411,3 +411,34 @@ mod tests {
         assert!(ensure_memory(usize::MAX / 1024, 1024, "x").is_err());
     }
 }
+
+/// Adaptive records (`CacheSettings::record_noise`), for `caches` and `render3d`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RecordNoiseArgs {
+    /// Adaptive records: each takes further light fields of `--rays` directions
+    /// (their derivatives averaged) until the estimated relative standard error of
+    /// its value is at most this, or it has `--max-light-fields`. Default: one light
+    /// field per record.
+    #[arg(long)]
+    pub record_noise: Option<f64>,
+    /// The most light fields a record takes under `--record-noise`.
+    #[arg(long, default_value_t = 8)]
+    pub max_light_fields: u32,
+}
+
+impl RecordNoiseArgs {
+    pub fn check(&self) -> anyhow::Result<()> {
+        if let Some(t) = self.record_noise {
+            check_range("--record-noise", t, volcache::limits::RECORD_NOISE)?;
+        }
+        check_count("--max-light-fields", self.max_light_fields as u64, 64)
+    }
+
+    pub fn target(&self) -> Option<volcache::pipeline::record::NoiseTarget> {
+        self.record_noise
+            .map(|relative| volcache::pipeline::record::NoiseTarget {
+                relative,
+                max_light_fields: self.max_light_fields,
+            })
+    }
+}

@@ -68,6 +68,8 @@ pub struct Cache3dArgs {
     /// anisotropic fog (see `volcache bench records`).
     #[arg(long, default_value_t = 0.0)]
     pub phase_roulette: f64,
+    #[command(flatten)]
+    pub record_noise: super::common::RecordNoiseArgs,
     /// Limit every record's radii to this multiple of its distance to the nearest
     /// surface edge it sees (a triangle's silhouette edge), where the light turns
     /// with the angle and no Taylor expansion reaches across, or to the nearest
@@ -139,6 +141,7 @@ impl Cache3dArgs {
             super::common::check_range("--edge-reach", k, volcache::limits::EDGE_REACH)?;
         }
         super::common::check_range("--phase-roulette", self.phase_roulette, (0.0, 100.0))?;
+        self.record_noise.check()?;
         anyhow::ensure!(
             (1..=1024).contains(&self.surface_paths),
             "--surface-paths must be between 1 and 1024"
@@ -187,6 +190,7 @@ impl Cache3dArgs {
         cs.direct_samples = self.direct_samples;
         cs.edge_reach = self.edge_reach;
         cs.probe.phase_roulette = self.phase_roulette;
+        cs.record_noise = self.record_noise.target();
         cs.seed = self.cache_seed;
         Ok((cs, cp))
     }

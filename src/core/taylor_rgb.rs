@@ -108,4 +108,23 @@ impl<S: Space> PartDerivs<S> {
     pub fn is_finite(&self) -> bool {
         self.direct.is_finite() && self.single.is_finite() && self.multiple.is_finite()
     }
+
+    /// The mean of independent estimates (zero for none).
+    pub fn mean(batches: &[Self]) -> Self {
+        let Some((first, rest)) = batches.split_first() else {
+            return PartDerivs::default();
+        };
+        let mut m = *first;
+        for b in rest {
+            m.direct += b.direct;
+            m.single += b.single;
+            m.multiple += b.multiple;
+        }
+        let k = 1.0 / batches.len() as f64;
+        PartDerivs {
+            direct: m.direct.scale(k),
+            single: m.single.scale(k),
+            multiple: m.multiple.scale(k),
+        }
+    }
 }

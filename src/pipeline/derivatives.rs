@@ -11,11 +11,11 @@
 
 use super::dim::Dim;
 use super::path::{Estimate, Parts, Query, Settings, estimate};
-use super::probe::{Angular, LightField, MediumSample, Outgoing};
+use super::probe::{Angular, LightField, MediumSample, Outgoing, ProbeRay};
 use super::proxy::{Element, ElementKind, Proxy, RadianceRule};
 use super::slide;
 use super::world::{DirectLight, World};
-use crate::core::color::Rgb;
+use crate::core::color::{Rgb, luminance};
 use crate::core::distance::distance;
 use crate::core::element::{medium_form_factor_smoothed, medium_softening, near_distance};
 use crate::core::metric::hessian_radiance_floor;
@@ -490,7 +490,7 @@ pub fn aware_with_noise<S: Dim>(
         total += s;
         per_ray.extend(g);
     }
-    let grad_var = neighbour_variance::<S>(lf, &per_ray);
+    let grad_var = neighbour_variance(lf, &per_ray, |a, b| S::length_squared(a - b));
     let direct = direct_derivatives(lf);
     let plain = PartDerivs {
         direct,
@@ -510,7 +510,11 @@ pub fn aware_with_noise<S: Dim>(
 /// variance is the sum of its strata's, and two neighbours differ by their noise
 /// (E|g_a − g_b|²/2 = their mean variance) plus the integrand's smooth change
 /// across one stratum, which the estimate counts as noise (it errs high).
-fn neighbour_variance<S: Dim>(lf: &LightField<S>, shares: &[S::Vec]) -> f64 {
+fn neighbour_variance<S: Dim, T: Copy>(
+    lf: &LightField<S>,
+    shares: &[T],
+    squared_difference: impl Fn(T, T) -> f64,
+) -> f64 {
     let (mut sum, mut edges) = (0.0, 0usize);
     for t in &lf.simplices {
         let v = t.as_ref();
@@ -519,7 +523,7 @@ fn neighbour_variance<S: Dim>(lf: &LightField<S>, shares: &[S::Vec]) -> f64 {
         for a in 0..pairs {
             let (i, j) = (v[a] as usize, v[(a + 1) % v.len()] as usize);
             if let (Some(&gi), Some(&gj)) = (shares.get(i), shares.get(j)) {
-                sum += S::length_squared(gi - gj) / 2.0;
+                sum += squared_difference(gi, gj) / 2.0;
                 edges += 1;
             }
         }
@@ -529,6 +533,27 @@ fn neighbour_variance<S: Dim>(lf: &LightField<S>, shares: &[S::Vec]) -> f64 {
     } else {
         shares.len() as f64 * sum / edges as f64
     }
+}
+
+/// The noise variance of the plain estimate's luminance of the scattered light
+/// (single + multiple: what a record caches and takes as its value), from the
+/// rays' shares of it ([`neighbour_variance`]; where neighbouring rays see
+/// different things, an edge counts as noise).
+pub fn scattered_value_variance<S: Dim>(lf: &LightField<S>) -> f64 {
+    let measure = lf.ray_measure();
+    let mut samples = Vec::new();
+    let shares: Vec<f64> = lf
+        .rays
+        .iter()
+        .map(|r| {
+            let (mut single, mut multiple) = ([Taylor2::<S>::zero(); 3], [Taylor2::<S>::zero(); 3]);
+            unaware_ray(lf, r, measure, &mut samples).accumulate(&mut single, &mut multiple);
+            luminance(Rgb::from_array(std::array::from_fn(|c| {
+                single[c].value + multiple[c].value
+            })))
+        })
+        .collect();
+    neighbour_variance(lf, &shares, |a, b| (a - b) * (a - b))
 }
 
 /// Rays summed per parallel task (see [`SUM_CHUNK`]).
@@ -574,24 +599,7 @@ pub fn unaware<S: Dim>(lf: &LightField<S>) -> PartDerivs<S> {
     let (mut single, mut multiple) = ([Taylor2::<S>::zero(); 3], [Taylor2::<S>::zero(); 3]);
     let mut samples = Vec::new();
     for r in &lf.rays {
-        samples.clear();
-        samples.extend(
-            r.samples
-                .iter()
-                .enumerate()
-                .map(|(i, l)| (lf.sample_depth(r, i), *l, lf.sample_thickness(r, i))),
-        );
-        let f = lf.angular_fixed(lf.x, r.dir);
-        UnawareRay::<S> {
-            sigma_t: lf.sigma_t,
-            weight: lf.sigma_s * (f.value * measure),
-            weight_log_grad: if f.value > 0.0 { f.grad / f.value } else { S::zero() },
-            grad_s: r.hit.map_or(S::zero(), |h| hit_distance_gradient::<S>(h.normal, r.dir)),
-            length: r.length,
-            end_radiance: r.hit.map_or(r.escaped, |h| h.radiance),
-            samples: &samples,
-        }
-        .accumulate(&mut single, &mut multiple);
+        unaware_ray(lf, r, measure, &mut samples).accumulate(&mut single, &mut multiple);
     }
     let mut direct = direct_derivatives(lf);
     for ch in &mut direct.channels {
@@ -601,6 +609,33 @@ pub fn unaware<S: Dim>(lf: &LightField<S>) -> PartDerivs<S> {
         direct,
         single: TaylorRgb { channels: single },
         multiple: TaylorRgb { channels: multiple },
+    }
+}
+
+/// One ray of [`unaware`] (`samples`: a buffer for its samples' depth, light and
+/// thickness).
+fn unaware_ray<'a, S: Dim>(
+    lf: &LightField<S>,
+    r: &ProbeRay<S>,
+    measure: f64,
+    samples: &'a mut Vec<(f64, Rgb, f64)>,
+) -> UnawareRay<'a, S> {
+    samples.clear();
+    samples.extend(
+        r.samples
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (lf.sample_depth(r, i), *l, lf.sample_thickness(r, i))),
+    );
+    let f = lf.angular_fixed(lf.x, r.dir);
+    UnawareRay::<S> {
+        sigma_t: lf.sigma_t,
+        weight: lf.sigma_s * (f.value * measure),
+        weight_log_grad: if f.value > 0.0 { f.grad / f.value } else { S::zero() },
+        grad_s: r.hit.map_or(S::zero(), |h| hit_distance_gradient::<S>(h.normal, r.dir)),
+        length: r.length,
+        end_radiance: r.hit.map_or(r.escaped, |h| h.radiance),
+        samples,
     }
 }
 

@@ -318,8 +318,16 @@ impl<S: Dim> LightField<S> {
     /// where the ray ended before shell i.
     pub fn medium_sample(&self, ray: usize, i: usize) -> Option<MediumSample<S>> {
         let (at, depth, light, dt) = self.medium_point(ray, i)?;
-        let slope = self.rays[ray].slopes.get(i).map_or([S::zero(); 3], |g| g.map(|v| v * dt));
-        Some(MediumSample { at, depth, light, slope })
+        let slope = self.rays[ray]
+            .slopes
+            .get(i)
+            .map_or([S::zero(); 3], |g| g.map(|v| v * dt));
+        Some(MediumSample {
+            at,
+            depth,
+            light,
+            slope,
+        })
     }
 
     /// [`Self::medium_sample`] without the slope (the proxy's vertices): where it

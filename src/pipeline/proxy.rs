@@ -223,7 +223,14 @@ pub fn elements<S: Dim>(lf: &LightField<S>, rule: RadianceRule) -> Vec<Element<S
             Piece::Element(e) => e,
             Piece::Shared(s) => {
                 let kind = (ElementKind::Medium, false);
-                make(lf.x, s.v, RadianceRule::Average, kind, s.dir_measure, (s.rays, Some(s.shell)))
+                make(
+                    lf.x,
+                    s.v,
+                    RadianceRule::Average,
+                    kind,
+                    s.dir_measure,
+                    (s.rays, Some(s.shell)),
+                )
             }
         })
     });
@@ -345,7 +352,12 @@ fn for_each_element<S: Dim>(lf: &LightField<S>, rule: RadianceRule, mut sink: im
             }
             if present.as_ref().iter().all(|&p| p) {
                 let (rays, shell, dir_measure) = (*t, i as u32, omega);
-                sink(Piece::Shared(SharedPiece { v, rays, shell, dir_measure }));
+                sink(Piece::Shared(SharedPiece {
+                    v,
+                    rays,
+                    shell,
+                    dir_measure,
+                }));
                 continue;
             }
             let kind = (ElementKind::Medium, true);

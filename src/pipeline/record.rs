@@ -12,11 +12,13 @@
 //! proxy's own value is 4–8% low where emitters' outlines cross its elements: the
 //! farther-vertex rule darkens them.)
 
-use super::derivatives::{AwareSettings, PartDerivs, aware_with_noise, unaware, with_plain_values};
+use super::derivatives::{
+    AwareSettings, PartDerivs, aware_with_noise, scattered_value_variance, unaware, with_plain_values,
+};
 use super::dim::Dim;
 use super::moments::{RecordMoments, combine, moment_derivs, weights_towards};
 use super::path::Settings;
-use super::probe::{Outgoing, ProbeSettings, capture};
+use super::probe::{LightField, Outgoing, ProbeSettings, capture};
 use super::proxy::build;
 use super::silhouette::nearest_boundary;
 use super::world::{DirectLight, World};
@@ -75,6 +77,21 @@ pub struct CacheSettings {
     /// (`shaded_lamp.json`, 800 records, seeds 1–3) RMSE 0.365/0.399/0.419 →
     /// 0.322/0.338/0.341, relMSE halved; within 0.1% on occluder, windows, forest.
     pub shrink_noisy_gradients: bool,
+    /// Take more light fields at a record (each of `probe.rays` directions, their
+    /// derivatives averaged) until its value's estimated noise meets a target. None:
+    /// one light field, the paper's record.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub record_noise: Option<NoiseTarget>,
+}
+
+/// When a record has enough light fields ([`CacheSettings::record_noise`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct NoiseTarget {
+    /// The relative standard error of the record's value (the luminance of its
+    /// scattered light, [`super::derivatives::scattered_value_variance`]) to reach.
+    pub relative: f64,
+    /// The most light fields a record takes (≥ 1).
+    pub max_light_fields: u32,
 }
 
 impl CacheSettings {
@@ -98,6 +115,7 @@ impl CacheSettings {
             direct_samples: None,
             edge_reach: None,
             shrink_noisy_gradients: true,
+            record_noise: None,
         }
     }
 
@@ -228,33 +246,8 @@ pub fn compute_record<W: World>(
         },
         ..cs.probe
     };
-    let mut lf = capture(world, x, out, &probe, mix64(cs.seed ^ mix64(id)), 0, progress)?;
-    let zero = <W::S as Space>::zero_mat();
-    let proxy = (cs.method == CacheMethod::Ours).then(|| build(&lf, cs.aware.rule));
-    let mut multiple_grad_var = 0.0;
-    let (parts, metric_hessians) = match &proxy {
-        Some(proxy) => {
-            let (parts, floored, var) = aware_with_noise(&lf, proxy, &cs.aware, cs.hessian_floor);
-            multiple_grad_var = var;
-            let floored = floored.unwrap_or(parts);
-            let lum = |t: crate::core::taylor_rgb::TaylorRgb<W::S>| t.luminance().hess;
-            let hessians = [
-                lum(floored.single + floored.multiple),
-                lum(floored.single),
-                lum(floored.multiple),
-            ];
-            (parts, hessians)
-        }
-        None => (unaware(&lf), [zero; 3]),
-    };
-    let parts = with_plain_values(parts, &lf);
-    let (moments, placed_weights) = match cs.moment_bands {
-        Some(bands) => (
-            moment_derivs(&mut lf, proxy.as_ref(), &cs.aware, bands),
-            weights_towards::<W::S>(lf.g, bands, lf.omega_o),
-        ),
-        None => (Vec::new(), Vec::new()),
-    };
+    let seed = mix64(cs.seed ^ mix64(id));
+    let mut lf = capture(world, x, out, &probe, seed, 0, progress)?;
     // Only a placement that limits reach by it pays for the boundary's check.
     let (nearest_edge, edge_rays) = match cs.edge_reach {
         Some(_) => {
@@ -269,6 +262,33 @@ pub fn compute_record<W: World>(
         }
         None => (f64::INFINITY, 0),
     };
+    let (mut capture_seconds, mut rays) = (lf.seconds, lf.cost_rays + edge_rays);
+    let mut derived = derive(&mut lf, cs);
+    if let Some(target) = cs.record_noise {
+        // Independent light fields (streams 1, 2, …) until the mean's standard
+        // error, √(Σ var)/n, is within the target.
+        let mut fields = vec![derived];
+        let mut var_sum = scattered_value_variance(&lf);
+        while fields.len() < target.max_light_fields as usize {
+            let n = fields.len() as f64;
+            let value: f64 = fields.iter().map(Derived::scattered_luminance).sum::<f64>() / n;
+            if var_sum.sqrt() / n <= target.relative * value.abs() {
+                break;
+            }
+            let mut more = capture(world, x, out, &probe, seed, fields.len() as u64, progress)?;
+            var_sum += scattered_value_variance(&more);
+            (capture_seconds, rays) = (capture_seconds + more.seconds, rays + more.cost_rays);
+            fields.push(derive(&mut more, cs));
+        }
+        derived = Derived::mean(&fields);
+    }
+    let Derived {
+        parts,
+        metric_hessians,
+        moments,
+        placed_weights,
+        multiple_grad_var,
+    } = derived;
     Ok(RecordData {
         parts,
         metric_hessians,
@@ -282,12 +302,87 @@ pub fn compute_record<W: World>(
                 <W::S as Space>::axis(0)
             }
         },
-        rays: lf.cost_rays + edge_rays,
+        rays,
         seconds: start.elapsed().as_secs_f64(),
-        capture_seconds: lf.seconds,
+        capture_seconds,
         nearest_edge,
         multiple_grad_var,
     })
+}
+
+/// What the method derives from one light field for a record.
+#[derive(Clone)]
+struct Derived<S: Dim> {
+    parts: PartDerivs<S>,
+    metric_hessians: [S::Mat; 3],
+    moments: Vec<PartDerivs<S>>,
+    placed_weights: Vec<f64>,
+    multiple_grad_var: f64,
+}
+
+impl<S: Dim> Derived<S> {
+    /// The luminance of the scattered light's value (single + multiple).
+    fn scattered_luminance(&self) -> f64 {
+        (self.parts.single + self.parts.multiple).luminance().value
+    }
+
+    /// The mean of independent light fields' (the gradient's noise variance that of
+    /// the mean: Σ v / n²).
+    fn mean(fields: &[Self]) -> Self {
+        let n = fields.len() as f64;
+        let mut metric_hessians = [S::zero_mat(); 3];
+        for (k, h) in metric_hessians.iter_mut().enumerate() {
+            *h = fields.iter().fold(S::zero_mat(), |a, d| a + d.metric_hessians[k]) * (1.0 / n);
+        }
+        let moments = (0..fields[0].moments.len())
+            .map(|k| PartDerivs::mean(&fields.iter().map(|d| d.moments[k]).collect::<Vec<_>>()))
+            .collect();
+        Derived {
+            parts: PartDerivs::mean(&fields.iter().map(|d| d.parts).collect::<Vec<_>>()),
+            metric_hessians,
+            moments,
+            placed_weights: fields[0].placed_weights.clone(),
+            multiple_grad_var: fields.iter().map(|d| d.multiple_grad_var).sum::<f64>() / (n * n),
+        }
+    }
+}
+
+/// The method's value, derivatives, metric Hessians and moments from one light
+/// field (left as given).
+fn derive<S: Dim>(lf: &mut LightField<S>, cs: &CacheSettings) -> Derived<S> {
+    let zero = S::zero_mat();
+    let proxy = (cs.method == CacheMethod::Ours).then(|| build(lf, cs.aware.rule));
+    let mut multiple_grad_var = 0.0;
+    let (parts, metric_hessians) = match &proxy {
+        Some(proxy) => {
+            let (parts, floored, var) = aware_with_noise(lf, proxy, &cs.aware, cs.hessian_floor);
+            multiple_grad_var = var;
+            let floored = floored.unwrap_or(parts);
+            let lum = |t: crate::core::taylor_rgb::TaylorRgb<S>| t.luminance().hess;
+            let hessians = [
+                lum(floored.single + floored.multiple),
+                lum(floored.single),
+                lum(floored.multiple),
+            ];
+            (parts, hessians)
+        }
+        None => (unaware(lf), [zero; 3]),
+    };
+    let parts = with_plain_values(parts, lf);
+    let (moments, placed_weights) = match cs.moment_bands {
+        Some(bands) => (
+            moment_derivs(lf, proxy.as_ref(), &cs.aware, bands),
+            weights_towards::<S>(lf.g, bands, lf.omega_o),
+        ),
+        None => (Vec::new(), Vec::new()),
+    };
+    Derived {
+        parts,
+        metric_hessians,
+        moments,
+        placed_weights,
+        multiple_grad_var,
+    }
 }
 
 /// Distance from the light field's point to the nearest point light it sees, +∞

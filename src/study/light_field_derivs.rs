@@ -128,21 +128,7 @@ pub fn reference_batch<W: World>(
 
 /// The mean of the batches' derivatives (zero for none).
 pub fn mean_parts<S: Dim>(batches: &[PartDerivs<S>]) -> PartDerivs<S> {
-    let Some((first, rest)) = batches.split_first() else {
-        return PartDerivs::default();
-    };
-    let mut m = *first;
-    for b in rest {
-        m.direct += b.direct;
-        m.single += b.single;
-        m.multiple += b.multiple;
-    }
-    let k = 1.0 / batches.len() as f64;
-    PartDerivs {
-        direct: m.direct.scale(k),
-        single: m.single.scale(k),
-        multiple: m.multiple.scale(k),
-    }
+    PartDerivs::mean(batches)
 }
 
 #[cfg(test)]
