@@ -69,18 +69,27 @@ impl crate::pipeline::medium::Region<D2> for Region {
 /// (u in [0, 1)) so a ray through a vertex counts one crossing, not two.
 fn crossings(poly: &[DVec2], o: DVec2, d: DVec2) -> SmallVec<[f64; 8]> {
     let mut ts = SmallVec::new();
-    let n = poly.len();
-    for i in 0..n {
-        let a = poly[i];
-        let e = poly[(i + 1) % n] - a;
+    let Some(&last) = poly.last() else {
+        return ts;
+    };
+    // Every transmittance query in a region walks all edges, and a ray crosses
+    // few: u rejects most edges before t's division is paid (a sixth of a
+    // windows.json record's time went here, 17% in a one-thread profile).
+    let mut a = last;
+    for &b in poly {
+        let e = b - a;
         let denom = super::geometry::cross(d, e);
+        let ao = a - o;
+        a = b;
         if denom == 0.0 {
             continue;
         }
-        let ao = a - o;
-        let t = super::geometry::cross(ao, e) / denom;
         let u = super::geometry::cross(ao, d) / denom;
-        if t > 0.0 && (0.0..1.0).contains(&u) {
+        if !(0.0..1.0).contains(&u) {
+            continue;
+        }
+        let t = super::geometry::cross(ao, e) / denom;
+        if t > 0.0 {
             ts.push(t);
         }
     }
