@@ -612,6 +612,17 @@ pub fn unaware<S: Dim>(lf: &LightField<S>) -> PartDerivs<S> {
     }
 }
 
+/// A ray's medium samples as [`UnawareRay`] takes them: depth, light and thickness.
+pub(super) fn fill_ray_samples<S: Dim>(lf: &LightField<S>, r: &ProbeRay<S>, samples: &mut Vec<(f64, Rgb, f64)>) {
+    samples.clear();
+    samples.extend(
+        r.samples
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (lf.sample_depth(r, i), *l, lf.sample_thickness(r, i))),
+    );
+}
+
 /// One ray of [`unaware`] (`samples`: a buffer for its samples' depth, light and
 /// thickness).
 fn unaware_ray<'a, S: Dim>(
@@ -620,13 +631,7 @@ fn unaware_ray<'a, S: Dim>(
     measure: f64,
     samples: &'a mut Vec<(f64, Rgb, f64)>,
 ) -> UnawareRay<'a, S> {
-    samples.clear();
-    samples.extend(
-        r.samples
-            .iter()
-            .enumerate()
-            .map(|(i, l)| (lf.sample_depth(r, i), *l, lf.sample_thickness(r, i))),
-    );
+    fill_ray_samples(lf, r, samples);
     let f = lf.angular_fixed(lf.x, r.dir);
     UnawareRay::<S> {
         sigma_t: lf.sigma_t,

@@ -10,7 +10,7 @@
 
 use super::derivatives::{
     AwareSettings, HESSIAN_SCALE_REACH, RAY_CHUNK, SUM_CHUNK, direct_derivatives, element_contribution,
-    element_incident, turning,
+    element_incident, fill_ray_samples, turning,
 };
 use super::dim::Dim;
 use super::probe::{Angular, LightField};
@@ -237,13 +237,7 @@ pub fn unaware_moments<S: Dim>(lf: &mut LightField<S>, bands: usize) -> Vec<Part
     );
     let mut samples = Vec::new();
     for r in &lf.rays {
-        samples.clear();
-        samples.extend(
-            r.samples
-                .iter()
-                .enumerate()
-                .map(|(i, l)| (lf.sample_depth(r, i), *l, lf.sample_thickness(r, i))),
-        );
+        fill_ray_samples(lf, r, &mut samples);
         let (mut s1, mut m1) = ([Taylor2::<S>::zero(); 3], [Taylor2::<S>::zero(); 3]);
         UnawareRay::<S> {
             sigma_t: lf.sigma_t,

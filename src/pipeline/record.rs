@@ -79,7 +79,10 @@ pub struct CacheSettings {
     pub shrink_noisy_gradients: bool,
     /// Take more light fields at a record (each of `probe.rays` directions, their
     /// derivatives averaged) until its value's estimated noise meets a target. None:
-    /// one light field, the paper's record.
+    /// one light field, the paper's record. Measured with 256 directions and a 10%
+    /// target (README): the rays go to thick anisotropic fog (shaded_lamp) and not
+    /// to thin fog (occluder, windows: +0.7% and no rays); on forest more records
+    /// pay more than more rays. Not a default: no rule won on every scene.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub record_noise: Option<NoiseTarget>,
 }
