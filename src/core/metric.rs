@@ -40,8 +40,9 @@ impl CacheMethod {
 
 /// The radiance added to every proxy element before the metric's Hessian is taken
 /// (theory.md §7, Schwarzhaupt et al. 2012): `fraction` × the elements' mean
-/// radiance (the sum of the `n` elements' radiance over n), or unit radiance when every element is black (a purely geometric
-/// Hessian). None when nothing is to be added.
+/// radiance (the sum of the `n` elements' radiance over n), or unit radiance when
+/// every element is black (a purely geometric Hessian). None when nothing is to be
+/// added.
 pub fn hessian_radiance_floor(radiance_sum: Rgb, n: usize, fraction: f64) -> Option<Rgb> {
     if n == 0 || fraction <= 0.0 {
         return None;
