@@ -5,6 +5,8 @@
 //! estimate follows the gradient's spread over record seeds, and shrinking lowers
 //! the field's error at equal records.
 
+mod common;
+
 use glam::DVec2;
 use volcache::core::color::luminance;
 use volcache::flatland::cached_field::{CacheMethod, CacheSettings, RecordMemo, render_cached};
@@ -14,19 +16,8 @@ use volcache::pipeline::probe::Outgoing;
 use volcache::pipeline::record::compute_record;
 use volcache::progress::Progress;
 
-const SCENE: &str = r#"{
-  "domain": {"min": [-1, -1], "max": [1, 1]},
-  "segments": [
-    {"name": "floor", "a": [-1, -0.85], "b": [1, -0.85], "reflectance": 0.5},
-    {"name": "plate", "a": [-0.45, 0.35], "b": [0.2, 0.5], "reflectance": 0.6}
-  ],
-  "lights": [{"type": "point", "position": [0.15, 0.25], "intensity": 1.0}],
-  "medium": {"sigma_a": 0.3, "sigma_s": 2.7, "g": 0.8, "region": "everywhere"},
-  "render": {"resolution": [96, 96], "spp": 64, "seed": 1}
-}"#;
-
 fn scene() -> Scene {
-    Scene::from_json(SCENE, "<gradient_noise>").unwrap_or_else(|e| panic!("{e}"))
+    common::noisy_fog_2d()
 }
 
 fn settings(seed: u64, shrink: bool) -> CacheSettings {

@@ -4,6 +4,8 @@
 //! quad lamp (3D) beside an occluder in thick forward-scattering fog, where one
 //! light field of 256 directions is noisy.
 
+mod common;
+
 use glam::{DVec2, DVec3};
 use volcache::core::metric::CacheMethod;
 use volcache::core::space::Space;
@@ -15,18 +17,13 @@ use volcache::pipeline::world::{VecOf, World};
 use volcache::progress::Progress;
 
 fn scene2d() -> volcache::flatland::scene::Scene {
-    let json = r#"{
-  "domain": {"min": [-1, -1], "max": [1, 1]},
-  "segments": [
-    {"name": "floor", "a": [-1, -0.85], "b": [1, -0.85], "reflectance": 0.5},
-    {"name": "plate", "a": [-0.45, 0.35], "b": [0.2, 0.5], "reflectance": 0.6}
-  ],
-  "lights": [{"type": "point", "position": [0.15, 0.25], "intensity": 1.0}],
-  "medium": {"sigma_a": 0.3, "sigma_s": 2.7, "g": 0.8, "region": "everywhere"},
-  "render": {"resolution": [32, 32], "spp": 4, "seed": 1}
-}"#;
-    volcache::flatland::scene::Scene::from_json(json, "<record_noise>").unwrap_or_else(|e| panic!("{e}"))
+    common::noisy_fog_2d()
 }
+
+/// Where the 2D records' light leaves towards, and the 3D points (seen from the
+/// camera).
+const OMEGA_2D: DVec2 = DVec2::new(0.6, -0.8);
+const POINTS_3D: [DVec3; 2] = [DVec3::new(0.2, 1.0, 0.6), DVec3::new(-0.8, 0.4, 0.2)];
 
 fn scene3d() -> volcache::volume::scene::Scene {
     let json = r#"{
@@ -97,15 +94,14 @@ where
 #[test]
 fn the_value_noise_estimate_follows_the_spread_2d() {
     let points = [DVec2::new(0.4, 0.1), DVec2::new(-0.5, -0.4), DVec2::new(-0.1, 0.8)];
-    estimate_follows_spread(&scene2d(), &points, |_| Outgoing::Direction(DVec2::new(0.6, -0.8)));
+    estimate_follows_spread(&scene2d(), &points, |_| Outgoing::Direction(OMEGA_2D));
 }
 
 #[test]
 fn the_value_noise_estimate_follows_the_spread_3d() {
     let s = scene3d();
     let eye = s.camera.position;
-    let points = [DVec3::new(0.2, 1.0, 0.6), DVec3::new(-0.8, 0.4, 0.2)];
-    estimate_follows_spread(&s, &points, |_| Outgoing::TowardsPoint(eye));
+    estimate_follows_spread(&s, &POINTS_3D, |_| Outgoing::TowardsPoint(eye));
 }
 
 /// Per seed, the record's cached luminance and rays.
@@ -169,7 +165,7 @@ fn mean_rays(v: &[(f64, u64)]) -> f64 {
 #[test]
 fn the_rays_go_where_the_noise_is() {
     let s = scene2d();
-    let out = Outgoing::Direction(DVec2::new(0.6, -0.8));
+    let out = Outgoing::Direction(OMEGA_2D);
     let cost = |x| {
         let n = 8;
         mean_rays(&records(&s, x, out, Some(0.2), n)) / mean_rays(&records(&s, x, out, None, n))
@@ -183,13 +179,12 @@ fn the_rays_go_where_the_noise_is() {
 #[test]
 fn adaptive_records_2d() {
     let points = [DVec2::new(0.4, 0.1), DVec2::new(-0.5, -0.4)];
-    adaptive_records(&scene2d(), &points, |_| Outgoing::Direction(DVec2::new(0.6, -0.8)));
+    adaptive_records(&scene2d(), &points, |_| Outgoing::Direction(OMEGA_2D));
 }
 
 #[test]
 fn adaptive_records_3d() {
     let s = scene3d();
     let eye = s.camera.position;
-    let points = [DVec3::new(0.2, 1.0, 0.6), DVec3::new(-0.8, 0.4, 0.2)];
-    adaptive_records(&s, &points, |_| Outgoing::TowardsPoint(eye));
+    adaptive_records(&s, &POINTS_3D, |_| Outgoing::TowardsPoint(eye));
 }

@@ -314,7 +314,6 @@ pub fn compute_record<W: World>(
 }
 
 /// What the method derives from one light field for a record.
-#[derive(Clone)]
 struct Derived<S: Dim> {
     parts: PartDerivs<S>,
     metric_hessians: [S::Mat; 3],

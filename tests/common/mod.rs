@@ -388,3 +388,20 @@ impl Fixture for D3 {
         }
     }
 }
+
+/// A point light beside a tilted plate in thick, forward-scattering fog (σ_t = 3,
+/// g = 0.8) over a floor: a 2D scene where one light field's records are noisy
+/// (`gradient_noise.rs`, `record_noise.rs`).
+pub fn noisy_fog_2d() -> volcache::flatland::scene::Scene {
+    let json = r#"{
+  "domain": {"min": [-1, -1], "max": [1, 1]},
+  "segments": [
+    {"name": "floor", "a": [-1, -0.85], "b": [1, -0.85], "reflectance": 0.5},
+    {"name": "plate", "a": [-0.45, 0.35], "b": [0.2, 0.5], "reflectance": 0.6}
+  ],
+  "lights": [{"type": "point", "position": [0.15, 0.25], "intensity": 1.0}],
+  "medium": {"sigma_a": 0.3, "sigma_s": 2.7, "g": 0.8, "region": "everywhere"},
+  "render": {"resolution": [96, 96], "spp": 64, "seed": 1}
+}"#;
+    volcache::flatland::scene::Scene::from_json(json, "<noisy fog 2d>").unwrap_or_else(|e| panic!("{e}"))
+}
