@@ -54,6 +54,7 @@ fn deep() -> Settings {
     Settings {
         max_depth: 100_000,
         rr_depth: 3,
+        ..Default::default()
     }
 }
 
@@ -220,6 +221,7 @@ fn single_scattering_matches_quadrature<F: Fixture>() {
     let settings = Settings {
         max_depth: 1,
         rr_depth: 3,
+        ..Default::default()
     };
     let mut rays = 0;
     let est = estimate_with(200_000, 5, 0, |smp| {

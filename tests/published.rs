@@ -83,6 +83,7 @@ fn half_space_reflectance_matches_published_values() {
             &Settings {
                 max_depth: 100_000,
                 rr_depth: 3,
+                ..Default::default()
             },
             spp,
             3,

@@ -52,6 +52,7 @@ fn boundary_flux(albedo: f64, zmin: f64, sensor_z: f64, normal_z: f64, n: u64) -
     let settings = Settings {
         max_depth: 1_000_000,
         rr_depth: 3,
+        ..Default::default()
     };
     let (x, nrm) = (DVec3::new(0.0, 0.0, sensor_z), DVec3::new(0.0, 0.0, normal_z));
     let mut rays = 0;

@@ -15,6 +15,7 @@ use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::scene::Scene;
 use volcache::limits;
 use volcache::output::OutputPlan;
+use volcache::pipeline::path::Sampling;
 use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 use volcache::study::field_runs::{self, FieldMethod, MethodRun, cache_run, pt_run};
@@ -72,6 +73,11 @@ pub struct CacheArgs {
     pub res: Option<[u32; 2]>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// How the samples of a path-traced pixel (`--method pt`, the reference) draw
+    /// their random numbers: stratified by default, as pbrt-v4's samplers are
+    /// (`--direct-samples`' sets are always stratified).
+    #[arg(long, value_enum, default_value = "stratified")]
+    pub sampling: Sampling,
     /// Samples per pixel of the reference field.
     #[arg(long, default_value_t = 4096)]
     pub ref_spp: u32,
@@ -105,6 +111,7 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
         None => (fp.width, fp.height) = ((fp.width / 2).max(1), (fp.height / 2).max(1)),
     }
     fp.seed = a.seed;
+    fp.settings.sampling = a.sampling;
     fp
 }
 

@@ -21,6 +21,7 @@ use std::process::ExitCode;
 use volcache::core::metric::CacheMethod;
 use volcache::limits;
 use volcache::output::OutputPlan;
+use volcache::pipeline::path::Sampling;
 use volcache::volume::records_file::scene_hash;
 use volcache::volume::render::{RenderParams, Rendered, ray_cast_rate, render};
 use volcache::volume::scene::Scene;
@@ -73,6 +74,11 @@ pub struct Render3dArgs {
     /// Seed of the per-(pixel, sample) random streams.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// How a pixel's camera samples draw their random numbers: independent by
+    /// default in 3D; stratified spreads the pixel position and the first light
+    /// and lobe samples, as pbrt-v4's samplers do (`path::Sampling`).
+    #[arg(long, value_enum, default_value = "independent")]
+    pub sampling: Sampling,
     /// Stop adding camera samples before a pass that would exceed this many seconds
     /// in all. Cache methods: the records' placement counts, and --spp is the camera
     /// samples placement visits (default 4); the time left adds camera samples
@@ -146,6 +152,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let mut params = RenderParams::from_scene(&scene);
+    params.settings.sampling = a.sampling;
     if let Some([w, h]) = a.res {
         (params.width, params.height) = (w as usize, h as usize);
     }

@@ -14,6 +14,7 @@ pub mod phase;
 pub mod phase_arc;
 pub mod rng;
 pub mod roulette;
+pub mod sobol;
 pub mod space;
 pub mod stats;
 pub mod taylor;

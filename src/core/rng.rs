@@ -24,7 +24,20 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 /// A random stream for one work item (pixel, probe point, sample index...).
 pub struct Sampler {
     rng: Pcg64Mcg,
+    /// Draws handed out before the stream's own (a stratified sample's first
+    /// dimensions, [`Sampler::stratified`]); `lead_next..lead_len` are left.
+    lead: [f64; LEAD],
+    lead_next: u8,
+    lead_len: u8,
 }
+
+/// How many first draws of a stratified sample come from its Sobol' point: three
+/// pairs, enough for one light sample and one lobe sample in 3D (pick, two
+/// coordinates on a triangle; two angles).
+pub const LEAD: usize = 6;
+
+/// The largest f64 below 1.
+const BELOW_ONE: f64 = 1.0 - f64::EPSILON / 2.0;
 
 impl Sampler {
     /// The stream for item `index` of a computation seeded with `seed`.
@@ -33,7 +46,36 @@ impl Sampler {
         let lo = mix64(hi ^ index.rotate_left(17) ^ 0xD1B5_4A32_D192_ED03);
         Sampler {
             rng: Pcg64Mcg::new(((hi as u128) << 64) | lo as u128),
+            lead: [0.0; LEAD],
+            lead_next: 0,
+            lead_len: 0,
         }
+    }
+
+    /// Sample `k` of a stratified set for the item seeded with `seed` (for
+    /// example a pixel's seed, drawn from its stream): its first [`LEAD`] draws
+    /// are a padded, Owen-scrambled Sobol' point ([`super::sobol`]), so the set's
+    /// samples spread over each pair of dimensions; later draws come from the
+    /// sample's own stream. Each sample is still uniform: estimators stay
+    /// unbiased and any sample count works.
+    pub fn stratified(seed: u64, k: u32) -> Self {
+        let mut s = Self::new(seed, k as u64);
+        for pair in 0..LEAD / 2 {
+            let h = |salt: u64| (mix64(seed ^ mix64(3 * pair as u64 + salt)) >> 32) as u32;
+            let (a, b) = super::sobol::padded_pair([h(0), h(1), h(2)], k);
+            // A random offset below 2^-32 keeps each draw uniform on [0, 1).
+            // (Rounding may reach 1: clamp to the largest draw below it.)
+            s.lead[2 * pair] = ((a as f64 + s.next_f64()) * (1.0 / 4_294_967_296.0)).min(BELOW_ONE);
+            s.lead[2 * pair + 1] = ((b as f64 + s.next_f64()) * (1.0 / 4_294_967_296.0)).min(BELOW_ONE);
+        }
+        s.lead_len = LEAD as u8;
+        s
+    }
+
+    /// 64 random bits (e.g. the seed of an item's stratified set).
+    #[inline]
+    pub fn next_u64(&mut self) -> u64 {
+        self.rng.next_u64()
     }
 
     /// A stream for a sub-item (e.g. sample `k` of pixel `index`).
@@ -44,6 +86,10 @@ impl Sampler {
     /// Uniform in [0, 1).
     #[inline]
     pub fn next_f64(&mut self) -> f64 {
+        if self.lead_next < self.lead_len {
+            self.lead_next += 1;
+            return self.lead[self.lead_next as usize - 1];
+        }
         (self.rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 

@@ -709,6 +709,12 @@ pub fn reference<W: World>(
 ) -> Derivatives<W::S> {
     type S<W> = <W as World>::S;
     let start = std::time::Instant::now();
+    // Independent samples: the reference states its standard errors (the app's
+    // noise flags, the studies' bounds), which a stratified set would overstate.
+    let settings = &Settings {
+        sampling: super::path::Sampling::Independent,
+        ..*settings
+    };
     let d = S::<W>::DIM;
     let e = |i: usize| S::<W>::axis(i);
     let mut offsets = vec![S::<W>::zero()];

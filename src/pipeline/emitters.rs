@@ -39,6 +39,21 @@ impl Emitters {
         (k, self.prims[k])
     }
 
+    /// [`Emitters::pick`], and `u` rescaled to [0, 1) within the picked emitter's
+    /// share: a uniform number independent of the pick, so one draw picks and
+    /// places (a stratified set's draws then spread over each emitter).
+    pub fn pick_remapped(&self, u: f64) -> (usize, u32, f64) {
+        let (k, prim) = self.pick(u);
+        let lo = if k == 0 { 0.0 } else { self.cdf[k - 1] };
+        let p = self.cdf[k] - lo;
+        let rest = if p > 0.0 {
+            ((u - lo) / p).clamp(0.0, 1.0 - f64::EPSILON / 2.0)
+        } else {
+            0.0
+        };
+        (k, prim, rest)
+    }
+
     /// Probability of picking emitter number `k`.
     pub fn probability(&self, k: usize) -> f64 {
         self.cdf[k] - if k == 0 { 0.0 } else { self.cdf[k - 1] }

@@ -80,7 +80,7 @@ impl QuerySource<D3> for CameraSamples<'_> {
         let pixel = self.order[k];
         let ip = &self.params.image;
         for sample in 0..self.params.placed_spp() {
-            let (ray, _) = CameraRay::trace(self.scene, &self.cam, pixel, sample, ip.seed);
+            let (ray, _) = CameraRay::trace(self.scene, &self.cam, pixel, sample, (ip.seed, ip.settings.sampling));
             for (i, t, _) in ray.march(self.params.march_step) {
                 let (p, k, i) = (pixel as u64, sample as u64, i as u64);
                 out.push(QueryPoint {

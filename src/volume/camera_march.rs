@@ -15,6 +15,7 @@ use super::mesh::Hit;
 use super::scene::Scene;
 use crate::core::rng::{Sampler, mix64};
 use crate::pipeline::medium::Region;
+use crate::pipeline::path::Sampling;
 use crate::pipeline::world::World;
 use glam::{DVec2, DVec3};
 
@@ -52,8 +53,15 @@ pub const OPAQUE_DEPTH: f64 = 746.0;
 impl CameraRay {
     /// Sample `k` of full-image pixel `pixel` (row-major, `cam.width` wide). Returns
     /// the ray and its stream, positioned after the draws the ray used.
-    pub fn trace(scene: &Scene, cam: &Camera, pixel: usize, k: u32, seed: u64) -> (CameraRay, Sampler) {
-        let mut s = Sampler::new2(seed, pixel as u64, k as u64);
+    /// `sampling` as the path tracer's camera samples (so both see the same rays).
+    pub fn trace(
+        scene: &Scene,
+        cam: &Camera,
+        pixel: usize,
+        k: u32,
+        (seed, sampling): (u64, Sampling),
+    ) -> (CameraRay, Sampler) {
+        let mut s = sampling.stream(seed, pixel as u64, k as u64);
         let (i, j) = (pixel % cam.width, pixel / cam.width);
         let p = DVec2::new(i as f64 + s.next_f64(), j as f64 + s.next_f64());
         let offset = s.next_f64();
@@ -167,8 +175,8 @@ mod tests {
     fn march_points_stratify_the_medium_piece() {
         let s = fog_room();
         let cam = super::super::render::camera(&s, 8, 8);
-        let (r, _) = CameraRay::trace(&s, &cam, 27, 3, 9);
-        let (again, _) = CameraRay::trace(&s, &cam, 27, 3, 9);
+        let (r, _) = CameraRay::trace(&s, &cam, 27, 3, (9, Sampling::Stratified));
+        let (again, _) = CameraRay::trace(&s, &cam, 27, 3, (9, Sampling::Stratified));
         assert_eq!(r.dir, again.dir);
         assert_eq!(r.offset, again.offset);
         let (t0, t1) = r.medium.expect("the centre pixels see the fog box");
@@ -200,7 +208,7 @@ mod tests {
         let n = 4000;
         let (mut t0, mut t1) = (0.0, 0.0);
         for k in 0..n {
-            let (r, _) = CameraRay::trace(&s, &cam, 27, k, 9);
+            let (r, _) = CameraRay::trace(&s, &cam, 27, k, (9, Sampling::Stratified));
             (t0, t1) = r.medium.unwrap();
             let dt = r.step(step);
             let mut est = 0.0;

@@ -140,8 +140,11 @@ pub fn emitter_nee(
     if scene.emitters.is_empty() {
         return Rgb::ZERO;
     }
-    let (k, i) = scene.emitters.pick(s.next_f64());
-    let (u1, u2) = (s.next_f64(), s.next_f64());
+    // One draw picks the triangle and places the point along one coordinate: a
+    // stratified sample's first pair of draws then spreads over every emitter's
+    // area (`Sampler::stratified`).
+    let (k, i, u1) = scene.emitters.pick_remapped(s.next_f64());
+    let u2 = s.next_f64();
     if Some(i) == skip {
         return Rgb::ZERO;
     }

@@ -120,7 +120,13 @@ where
     G: FnMut(&Hit, DVec3, &mut Sampler, &mut u64) -> Rgb,
     F: FnMut(DVec3, &Lobe, Rgb, &mut Sampler, &mut u64) -> (Rgb, bool),
 {
-    let (ray, mut s) = CameraRay::trace(scene, cam, pixel, k, params.image.seed);
+    let (ray, mut s) = CameraRay::trace(
+        scene,
+        cam,
+        pixel,
+        k,
+        (params.image.seed, params.image.settings.sampling),
+    );
     *rays += 1;
     let end = ray.hit.map_or_else(|| scene.world_exit(ray.origin, ray.dir), |h| h.t);
     let t_end = scene

@@ -55,7 +55,7 @@ impl SurfaceSource<D3> for CameraSurfaces<'_> {
         let pixel = self.order[k];
         let ip = &self.params.image;
         for sample in 0..self.params.placed_spp() {
-            let (ray, _) = CameraRay::trace(self.scene, &self.cam, pixel, sample, ip.seed);
+            let (ray, _) = CameraRay::trace(self.scene, &self.cam, pixel, sample, (ip.seed, ip.settings.sampling));
             let Some(hit) = ray.hit else { continue };
             let sp = self.scene.surface(&hit, ray.dir);
             if !sp.active || sp.reflectance == Rgb::ZERO {
