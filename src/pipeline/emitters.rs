@@ -131,4 +131,30 @@ mod tests {
         assert_eq!(em.pick(0.0).0, 0);
         assert_eq!(em.pick(1.0 - f64::EPSILON).0, 3);
     }
+
+    /// The remapped number is uniform within each emitter: stratified u give, per
+    /// emitter, its own evenly spread numbers in [0, 1) (mean 1/2, none outside),
+    /// and the pick is `pick`'s.
+    #[test]
+    fn the_remapped_number_is_uniform_within_each_emitter() {
+        let (em, _) = table();
+        let n = 200_000;
+        let (mut sum, mut count) = ([0.0; 4], [0usize; 4]);
+        for i in 0..n {
+            let u = (i as f64 + 0.5) / n as f64;
+            let (k, prim, rest) = em.pick_remapped(u);
+            assert_eq!((k, prim), em.pick(u));
+            assert!((0.0..1.0).contains(&rest), "u {u}: {rest}");
+            sum[k] += rest;
+            count[k] += 1;
+        }
+        for k in [0, 3] {
+            let mean = sum[k] / count[k] as f64;
+            assert!(
+                (mean - 0.5).abs() < 1.0 / count[k] as f64 + 1e-9,
+                "emitter {k}: mean {mean}"
+            );
+        }
+        assert!(em.pick_remapped(1.0 - f64::EPSILON / 2.0).2 < 1.0);
+    }
 }
