@@ -1,6 +1,6 @@
 //! The compare view's computation: a reference field and two cache methods (ours,
 //! Jarosz 2008) on the same scene at equal cache count, by the protocol `volcache
-//! figure compare` runs ([`crate::study::field_runs`]): `render_field` for the
+//! figure compare` runs ([`crate::study::field_runs`]): `render_reference` for the
 //! reference (its own seed, [`reference_seed`]), then per method the search for ε
 //! ([`eps_for_count`]) and a fresh, timed run at it ([`timed_run`]), and
 //! `field_errors` against the reference. The field settings are the scene's own (as
@@ -10,10 +10,11 @@
 use super::command::shell_quote;
 use super::jobs::{Job, Notify, Priority, Reporter};
 use crate::flatland::cached_field::{CacheMethod, CacheSettings, RecordInfo};
-use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors, render_field};
+use crate::flatland::field::{Field, FieldErrors, FieldParams, field_errors};
 use crate::flatland::scene::Scene;
 use crate::pipeline::placement::CountError;
 use crate::study::field_runs::{self, TimedRun, eps_for_count, timed_run};
+use crate::study::reference2d::render_reference;
 use crate::study::seeds::reference_seed;
 use std::sync::Arc;
 
@@ -166,7 +167,7 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
                 rp.width, rp.height, rp.spp
             ));
             // At full precision, as `figure compare` measures (its store keeps f64).
-            let reference = render_field(&scene, &rp, r.progress())?;
+            let (reference, _) = render_reference(&scene, &rp, r.progress())?;
             r.add_rays(reference.rays);
             let mut res = CompareResult {
                 fp: fp.clone(),

@@ -49,15 +49,7 @@ pub fn reference_field<P: AsRef<Progress>>(
         return Ok(found);
     }
     let handle = progress(&format!("reference {}x{} @ {} spp", fp.width, fp.height, fp.spp));
-    let r = if fp.settings.sampling == Sampling::Stratified && fp.spp >= 2 {
-        render_halves(scene, fp, handle.as_ref())
-    } else {
-        render_field(scene, fp, handle.as_ref()).map(|r| {
-            let n = r.std_error.len().max(1) as f64;
-            let rms = (r.std_error.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
-            (r, rms)
-        })
-    };
+    let r = render_reference(scene, fp, handle.as_ref());
     drop(handle);
     let (r, rms_std_error) = r?;
     let info = ReferenceInfo {
@@ -72,6 +64,22 @@ pub fn reference_field<P: AsRef<Progress>>(
     write_image(dir, &key, f.width, f.height, &f.values, Some(&f.valid))?;
     write_info(dir, &key, &info)?;
     Ok((r.field, info))
+}
+
+/// Render the reference field of `fp` (the store's and the app's comparison's):
+/// the field and its RMS noise; stratified in two halves ([`render_halves`]).
+pub fn render_reference(
+    scene: &Scene,
+    fp: &FieldParams,
+    progress: &Progress,
+) -> Result<(RenderedField, f64), Cancelled> {
+    if fp.settings.sampling == Sampling::Stratified && fp.spp >= 2 {
+        return render_halves(scene, fp, progress);
+    }
+    let r = render_field(scene, fp, progress)?;
+    let n = r.std_error.len().max(1) as f64;
+    let rms = (r.std_error.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+    Ok((r, rms))
 }
 
 /// A stratified reference as two independent sets of half the samples each (their
