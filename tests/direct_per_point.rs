@@ -211,7 +211,7 @@ fn records_leave_out_what_the_march_points_add_3d() {
 /// on the same camera samples (two independent 16-path references, their noise
 /// taken out), with the straight light sampled at every march point (8 samples)
 /// and with it cached: per-point sampling is better for every record seed, and by
-/// about 0.6× on average.
+/// about 0.7× on average.
 #[test]
 fn per_point_straight_light_in_3d_images() {
     use volcache::volume::cached::{CachedRenderParams, march_reference, render_cached};
@@ -229,7 +229,7 @@ fn per_point_straight_light_in_3d_images() {
     let reference: Vec<f64> = r1.iter().zip(&r2).map(|(a, b)| 0.5 * (a + b)).collect();
     let noise2 = rms(&r1, &r2).powi(2) / 4.0;
     let mut ratios = Vec::new();
-    for seed in 1..=4 {
+    for seed in 1..=12 {
         let error = |ds| {
             let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, p.image.settings);
             (cs.probe.rays, cs.probe.steps, cs.seed, cs.direct_samples) = (512, 8, seed, ds);
@@ -245,8 +245,12 @@ fn per_point_straight_light_in_3d_images() {
         );
         ratios.push(sampled / cached);
     }
-    // Measured (seeds 1-6): 0.68, 0.45, 0.77, 0.44, 0.37, 0.62; the per-point
-    // estimate's own noise (8 samples per point, 2 camera samples) is part of it.
+    // Measured (seeds 1-12): 0.71, 0.83, 0.69, 0.94, 0.68, 0.56, 0.66, 0.67, 0.62,
+    // 0.70, 0.46, 0.87 (mean 0.70); with 30 records the cached image's error swings
+    // with the records' luck (the same seeds before the emitter sample's draws
+    // changed order gave 0.68, 0.45, 0.77, 0.44, 0.37, 0.62), so twelve seeds, not
+    // four. The per-point estimate's own noise (8 samples per point, 2 camera
+    // samples) is part of it.
     let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
     assert!(mean < 0.75 && ratios.iter().all(|&r| r < 0.95), "{ratios:?}");
 }
