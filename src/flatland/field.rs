@@ -116,6 +116,12 @@ pub struct RenderedField {
 }
 
 impl RenderedField {
+    /// RMS over pixels of the per-pixel standard error (luminance).
+    pub fn rms_std_error(&self) -> f64 {
+        let n = self.std_error.len().max(1) as f64;
+        (self.std_error.iter().map(|e| e * e).sum::<f64>() / n).sqrt()
+    }
+
     /// Mean over valid pixels of (standard error / max(value, small)) of luminance:
     /// how converged the field is.
     pub fn mean_relative_error(&self) -> f64 {

@@ -77,8 +77,7 @@ pub fn render_reference(
         return render_halves(scene, fp, progress);
     }
     let r = render_field(scene, fp, progress)?;
-    let n = r.std_error.len().max(1) as f64;
-    let rms = (r.std_error.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+    let rms = r.rms_std_error();
     Ok((r, rms))
 }
 
@@ -138,14 +137,19 @@ mod tests {
     use super::*;
     use std::sync::Arc;
 
+    /// `windows.json`: its medium covers part of the domain.
+    fn windows() -> Scene {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/flatland_scenes/windows.json");
+        Scene::load(std::path::Path::new(path)).unwrap()
+    }
+
     /// A reference read back is the one rendered, bit for bit (values and where it
     /// is defined), and says it came from disk; other parameters miss the store.
     #[test]
     fn a_stored_reference_comes_back_exactly() {
         let dir = tempfile::tempdir().unwrap();
         // A medium over part of the domain: the field is undefined elsewhere.
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/flatland_scenes/windows.json");
-        let scene = Scene::load(std::path::Path::new(path)).unwrap();
+        let scene = windows();
         let fp = FieldParams {
             width: 9,
             height: 7,
@@ -179,8 +183,7 @@ mod tests {
     #[test]
     fn a_stratified_reference_states_its_real_noise() {
         let dir = tempfile::tempdir().unwrap();
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/flatland_scenes/windows.json");
-        let scene = Scene::load(std::path::Path::new(path)).unwrap();
+        let scene = windows();
         let fp = FieldParams {
             width: 24,
             height: 16,
@@ -194,10 +197,7 @@ mod tests {
             })
             .unwrap()
         };
-        let overstated = {
-            let r = render_field(&scene, &fp, &Progress::new()).unwrap();
-            (r.std_error.iter().map(|e| e * e).sum::<f64>() / r.std_error.len() as f64).sqrt()
-        };
+        let overstated = render_field(&scene, &fp, &Progress::new()).unwrap().rms_std_error();
         for seed in [1u64, 3, 5, 7] {
             let ((a, ia), (b, ib)) = (get(seed), get(seed + 1));
             let n = a.values.len() as f64;
