@@ -197,7 +197,7 @@ fn medium_samples_summed_once_agree_with_the_pieces<F: Fixture>() {
             .iter()
             .filter(|e| e.kind == ElementKind::Medium && e.radiance != Rgb::ZERO)
         {
-            per_piece += element_contribution(&lf, e, settings.medium_clamp).luminance();
+            per_piece += element_contribution(&lf, e, &settings).luminance();
         }
         let ev = (once.value - per_piece.value).abs() / per_piece.value;
         let eg = F::length(once.grad - per_piece.grad) / F::length(per_piece.grad);

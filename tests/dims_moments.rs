@@ -50,6 +50,13 @@ fn moments_give_the_record<F: Fixture>() {
                 cs.probe.rays = if F::DIM == 2 { 256 } else { 512 };
                 cs.probe.steps = 8;
                 cs.moment_bands = Some(bands);
+                // The record for ω_o takes the phase at each element's anchor, as the
+                // moments' basis functions are: with the phase integrated over the
+                // elements its lobe turns within (the default, 3D), ours' record at
+                // the third point differs from the moments by 0.11 in the gradient
+                // and 0.13 in the Hessian at 512 directions — the anchor rule's
+                // error, which the moments keep.
+                cs.aware.lobe_integral = false;
                 let rd =
                     compute_record(&world, x, Outgoing::Direction(w_o), &cs, 7 + i as u64, &Progress::new()).unwrap();
                 let want = rd.payload(Cached::Scattered);

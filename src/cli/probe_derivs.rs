@@ -118,6 +118,7 @@ fn shared<S: Dim>(a: &ProbeArgs, max_depth: u32, scene_seed: u64) -> anyhow::Res
         aw: AwareSettings {
             medium_clamp: a.medium_clamp,
             rule: a.rule,
+            ..AwareSettings::default()
         },
         method: match a.method {
             Method::Aware => derivatives::Method::Aware,

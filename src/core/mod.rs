@@ -12,6 +12,7 @@ pub mod metric;
 pub mod mis;
 pub mod phase;
 pub mod phase_arc;
+pub mod phase_patch;
 pub mod rng;
 pub mod roulette;
 pub mod sobol;

@@ -60,6 +60,14 @@ pub struct AwareSettings {
     /// Near-field clamp of medium elements' form-factor derivatives, in units of
     /// the march step Δt.
     pub medium_clamp: f64,
+    /// Integrate the phase (with the transmittance) over the surface elements it
+    /// turns within (3D: `core::phase_patch`) instead of taking it at each element's
+    /// anchor. On by default: at g = 0.99 aimed into an emitter it takes the
+    /// gradient from 1000× to 1% off (`tests/forward_scattering_3d.rs`), at g = 0.7
+    /// and 256 directions the Hessian's p90 from 8.6× to 0.95×, and it costs no
+    /// measurable time. Off reproduces the anchor rule that the moments over ω_o
+    /// (`moments_sum`) use, whose smooth basis functions it cannot split.
+    pub lobe_integral: bool,
 }
 
 impl Default for AwareSettings {
@@ -67,6 +75,7 @@ impl Default for AwareSettings {
         AwareSettings {
             rule: RadianceRule::Farther,
             medium_clamp: 1.0,
+            lobe_integral: true,
         }
     }
 }
@@ -147,7 +156,8 @@ pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>) -> TaylorRgb
 }
 
 /// One proxy element's contribution σ_s f T L F with its derivatives.
-pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_clamp: f64) -> TaylorRgb<S> {
+pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings: &AwareSettings) -> TaylorRgb<S> {
+    let medium_clamp = settings.medium_clamp;
     let soft = near_distance(e.size());
     let s = lf.sigma_s;
     let times_sigma_s = |t: [Taylor2<S>; 3]| [t[0] * s.x, t[1] * s.y, t[2] * s.z];
@@ -164,6 +174,16 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, medium_c
                 None => transmittance_taylor_rgb::<S>(lf.sigma_t, lf.x, e.anchor, soft),
             };
             return TaylorRgb::tint(pw, e.radiance).mul_channels(times_sigma_s(t));
+        }
+        // A lobe narrower than the element (3D, g → ±1) is not sampled at one point:
+        // the element is split where the lobe turns within it and f·T integrated
+        // over the pieces (`core::phase_patch`; T too: it turns across the element
+        // as much as the lobe's place in it does).
+        if settings.lobe_integral && e.far_plane.is_none() && lf.angular == Angular::Phase {
+            let sigma_t = [lf.sigma_t.x, lf.sigma_t.y, lf.sigma_t.z];
+            if let Some(ft) = S::lobe_integral(lf.g, e.v, lf.x, lf.outgoing(), sigma_t) {
+                return TaylorRgb::tint(Taylor2::constant(1.0), e.radiance).mul_channels(times_sigma_s(ft));
+            }
         }
         if let Some(plane) = e.far_plane {
             // An occlusion boundary: f·T by the vertex rule with the near vertices
@@ -437,14 +457,14 @@ pub fn aware_with_noise<S: Dim>(
             let mut sums = Sums::default();
             for e in chunk {
                 if e.radiance != Rgb::ZERO {
-                    sums.add(e.kind, false, element_contribution(lf, e, clamp));
+                    sums.add(e.kind, false, element_contribution(lf, e, settings));
                 }
                 if let Some(f) = floor {
                     let floored = Element {
                         radiance: e.radiance + f,
                         ..*e
                     };
-                    sums.add(e.kind, true, element_contribution(lf, &floored, clamp));
+                    sums.add(e.kind, true, element_contribution(lf, &floored, settings));
                 }
             }
             sums

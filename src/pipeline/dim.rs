@@ -13,6 +13,7 @@ use super::directions;
 use crate::core::element::{segment_form_factor, segment_form_factor_clamped};
 use crate::core::phase::{Hg2, Hg3, Outgoing};
 use crate::core::phase_arc::phase_weighted_angle;
+use crate::core::phase_patch::lobe_integral;
 use crate::core::rng::Sampler;
 use crate::core::space::{D2, D3, Space};
 use crate::core::taylor::Taylor2;
@@ -100,6 +101,18 @@ pub trait Dim: Space<Vec: Serialize + Default> {
         x: Self::Vec,
         out: Outgoing<Self::Vec>,
     ) -> Option<Taylor2<Self>>;
+    /// ∫ f T dω over the simplex's directions (an oriented simplex), per channel of
+    /// the extinction, with its derivatives, where the phase's lobe turns within the
+    /// simplex (3D: `core::phase_patch`, split pieces and a degree-5 area rule);
+    /// `None` where one point of the simplex serves, and always in 2D (the closed
+    /// form [`Dim::phase_weighted_form`] integrates the phase there).
+    fn lobe_integral(
+        g: f64,
+        v: Self::Simplex<Self::Vec>,
+        x: Self::Vec,
+        out: Outgoing<Self::Vec>,
+        sigma_t: [f64; 3],
+    ) -> Option<[Taylor2<Self>; 3]>;
 }
 
 /// The componentwise operations of [`Dim`] for a glam vector type (the same names in
@@ -222,6 +235,10 @@ impl Dim for D2 {
     fn phase_weighted_form(g: f64, [a, b]: [DVec2; 2], x: DVec2, out: Outgoing<DVec2>) -> Option<Taylor2<D2>> {
         Some(phase_weighted_angle(g, a, b, x, out))
     }
+
+    fn lobe_integral(_: f64, _: [DVec2; 2], _: DVec2, _: Outgoing<DVec2>, _: [f64; 3]) -> Option<[Taylor2<D2>; 3]> {
+        None
+    }
 }
 
 impl Dim for D3 {
@@ -319,5 +336,15 @@ impl Dim for D3 {
 
     fn phase_weighted_form(_: f64, _: [DVec3; 3], _: DVec3, _: Outgoing<DVec3>) -> Option<Taylor2<D3>> {
         None
+    }
+
+    fn lobe_integral(
+        g: f64,
+        v: [DVec3; 3],
+        x: DVec3,
+        out: Outgoing<DVec3>,
+        sigma_t: [f64; 3],
+    ) -> Option<[Taylor2<D3>; 3]> {
+        lobe_integral(g, v, x, out, sigma_t)
     }
 }

@@ -66,7 +66,7 @@ pub fn aware_moments<S: Dim>(
                     let (mut single, mut multiple) = (TaylorRgb::default(), TaylorRgb::default());
                     let per_moment = |e: &&Element<S>| !plain_surface(e) && e.radiance != Rgb::ZERO;
                     for e in chunk.iter().filter(per_moment) {
-                        let c = element_contribution(lf, e, clamp);
+                        let c = element_contribution(lf, e, settings);
                         match e.kind {
                             ElementKind::Surface => single += c,
                             ElementKind::Medium => multiple += c,
