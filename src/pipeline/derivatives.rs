@@ -181,7 +181,13 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         // as much as the lobe's place in it does).
         if settings.lobe_integral && e.far_plane.is_none() && lf.angular == Angular::Phase {
             let sigma_t = [lf.sigma_t.x, lf.sigma_t.y, lf.sigma_t.z];
-            if let Some(ft) = S::lobe_integral(lf.g, e.v, lf.x, lf.outgoing(), sigma_t) {
+            // At most a quarter as many pieces per element as the probe has
+            // directions, so the integral's cost follows the probe's: a 32-direction
+            // probe at g = 0.999 split its elements into ≈ 3000 pieces each and ran
+            // 30× slower (`tests/extreme_grid.rs`); 4096 directions at g = 0.99 need
+            // ≈ 500 around the lobe's axis.
+            let max_pieces = (lf.rays.len() / 4).clamp(16, 1024);
+            if let Some(ft) = S::lobe_integral(lf.g, e.v, lf.x, lf.outgoing(), sigma_t, max_pieces) {
                 return TaylorRgb::tint(Taylor2::constant(1.0), e.radiance).mul_channels(times_sigma_s(ft));
             }
         }

@@ -103,15 +103,17 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     ) -> Option<Taylor2<Self>>;
     /// ∫ f T dω over the simplex's directions (an oriented simplex), per channel of
     /// the extinction, with its derivatives, where the phase's lobe turns within the
-    /// simplex (3D: `core::phase_patch`, split pieces and a degree-5 area rule);
-    /// `None` where one point of the simplex serves, and always in 2D (the closed
-    /// form [`Dim::phase_weighted_form`] integrates the phase there).
+    /// simplex (3D: `core::phase_patch`, at most `max_pieces` split pieces and a
+    /// degree-5 area rule); `None` where one point of the simplex serves, and
+    /// always in 2D (the closed form [`Dim::phase_weighted_form`] integrates the
+    /// phase there).
     fn lobe_integral(
         g: f64,
         v: Self::Simplex<Self::Vec>,
         x: Self::Vec,
         out: Outgoing<Self::Vec>,
         sigma_t: [f64; 3],
+        max_pieces: usize,
     ) -> Option<[Taylor2<Self>; 3]>;
 }
 
@@ -236,7 +238,14 @@ impl Dim for D2 {
         Some(phase_weighted_angle(g, a, b, x, out))
     }
 
-    fn lobe_integral(_: f64, _: [DVec2; 2], _: DVec2, _: Outgoing<DVec2>, _: [f64; 3]) -> Option<[Taylor2<D2>; 3]> {
+    fn lobe_integral(
+        _: f64,
+        _: [DVec2; 2],
+        _: DVec2,
+        _: Outgoing<DVec2>,
+        _: [f64; 3],
+        _: usize,
+    ) -> Option<[Taylor2<D2>; 3]> {
         None
     }
 }
@@ -344,7 +353,8 @@ impl Dim for D3 {
         x: DVec3,
         out: Outgoing<DVec3>,
         sigma_t: [f64; 3],
+        max_pieces: usize,
     ) -> Option<[Taylor2<D3>; 3]> {
-        lobe_integral(g, v, x, out, sigma_t)
+        lobe_integral(g, v, x, out, sigma_t, max_pieces)
     }
 }
