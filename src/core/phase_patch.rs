@@ -204,11 +204,6 @@ pub fn lobe_integral(
     Some(sum)
 }
 
-/// [`lobe_integral`] in a vacuum: ∫ f dω with its derivatives.
-pub fn phase_weighted_solid_angle(g: f64, v: [DVec3; 3], x: DVec3, out: Outgoing<DVec3>) -> Option<Taylor2<D3>> {
-    lobe_integral(g, v, x, out, [0.0; 3], 4096).map(|s| s[0])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -235,6 +230,11 @@ mod tests {
             }
         }
         sum
+    }
+
+    /// [`lobe_integral`] in a vacuum: ∫ f dω with its derivatives.
+    fn phase_weighted_solid_angle(g: f64, v: [DVec3; 3], x: DVec3, out: Outgoing<DVec3>) -> Option<Taylor2<D3>> {
+        lobe_integral(g, v, x, out, [0.0; 3], 4096).map(|s| s[0])
     }
 
     fn triangle() -> [DVec3; 3] {
