@@ -122,16 +122,23 @@ pub fn irradiance(scene: &Scene, x: DVec3, n: DVec3) -> Rgb {
     arriving(scene, x, SPLIT, |w| n.dot(w).max(0.0))
 }
 
+/// The radiance triangle `e` emits towards `x`: `None` where it emits nothing or
+/// `x` lies behind a one-sided emitter.
+fn emission_towards(scene: &Scene, e: usize, x: DVec3) -> Option<Rgb> {
+    let t = &scene.geometry.prims[e];
+    let surface = &scene.surfaces[t.shape as usize];
+    let facing = t.normal.dot(x - t.p0) > 0.0;
+    (surface.emission != Rgb::ZERO && (facing || surface.two_sided)).then_some(surface.emission)
+}
+
 /// ∫ weight(ω) T L_e dω over the emitters' parts `x` sees, ω the direction from x.
 fn arriving(scene: &Scene, x: DVec3, split_by: usize, weight: impl Fn(DVec3) -> f64) -> Rgb {
     let gl = gauss_legendre(NODES);
     let mut sum = Rgb::ZERO;
     for (e, t) in scene.geometry.prims.iter().enumerate() {
-        let surface = &scene.surfaces[t.shape as usize];
-        let facing = t.normal.dot(x - t.p0) > 0.0;
-        if surface.emission == Rgb::ZERO || !(facing || surface.two_sided) {
+        let Some(emission) = emission_towards(scene, e, x) else {
             continue;
-        }
+        };
         for piece in visible_pieces(scene, x, e) {
             for i in 1..piece.len() - 1 {
                 let (a, b, c) = (piece[0], piece[i], piece[i + 1]);
@@ -149,7 +156,7 @@ fn arriving(scene: &Scene, x: DVec3, split_by: usize, weight: impl Fn(DVec3) -> 
                             let w = d / r;
                             let cos = t.normal.dot(w).abs();
                             let jac = 0.25 * wu * wv * u * area2;
-                            sum += surface.emission * scene.transmittance(x, w, r) * (weight(w) * cos / (r * r) * jac);
+                            sum += emission * scene.transmittance(x, w, r) * (weight(w) * cos / (r * r) * jac);
                         }
                     }
                 }
@@ -196,12 +203,10 @@ pub fn single_scattering_about_lobe(scene: &Scene, x: DVec3, omega_o: DVec3) -> 
     let gl = gauss_legendre(16);
     let width = (1.0 - g.abs()).max(1e-6);
     let mut sum = Rgb::ZERO;
-    for t in &scene.geometry.prims {
-        let surface = &scene.surfaces[t.shape as usize];
-        let facing = t.normal.dot(x - t.p0) > 0.0;
-        if surface.emission == Rgb::ZERO || !(facing || surface.two_sided) {
+    for (e, t) in scene.geometry.prims.iter().enumerate() {
+        let Some(emission) = emission_towards(scene, e, x) else {
             continue;
-        }
+        };
         let v = [t.p0, t.p0 + t.e1, t.p0 + t.e2];
         let azimuth = |p: DVec3| {
             let d = p - x;
@@ -271,7 +276,7 @@ pub fn single_scattering_about_lobe(scene: &Scene, x: DVec3, omega_o: DVec3) -> 
                             inner += scene.transmittance(x, dir, r) * (f * th.sin() * 0.5 * (w[1] - w[0]) * wt);
                         }
                     }
-                    sum += surface.emission * inner * (0.5 * (b - a) * wz);
+                    sum += emission * inner * (0.5 * (b - a) * wz);
                 }
             }
         }
