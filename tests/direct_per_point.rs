@@ -207,11 +207,14 @@ fn records_leave_out_what_the_march_points_add_3d() {
     assert!(worst < 1.0, "worst {worst}");
 }
 
-/// 3D images of the room at 30 records: the medium part against a march reference
+/// 3D images of the room at 32 records: the medium part against a march reference
 /// on the same camera samples (two independent 16-path references, their noise
 /// taken out), with the straight light sampled at every march point (8 samples)
 /// and with it cached: per-point sampling is better for every record seed, and by
-/// about 0.7× on average.
+/// about 0.7× on average (0.61 measured with 3D silhouette cuts). The count was 30
+/// until the 3D proxy cut its simplices at silhouettes: record seed 4 then placed
+/// 32 records or fewer than 28.5 at any ε (the count is not monotone in ε), and
+/// the search rightly reported that it missed.
 #[test]
 fn per_point_straight_light_in_3d_images() {
     use volcache::volume::cached::{CachedRenderParams, march_reference, render_cached};
@@ -233,7 +236,7 @@ fn per_point_straight_light_in_3d_images() {
         let error = |ds| {
             let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, p.image.settings);
             (cs.probe.rays, cs.probe.steps, cs.seed, cs.direct_samples) = (512, 8, seed, ds);
-            let r = render_cached(&s, &p, &cs, Some(30), &mut RecordMemo3::new(), &Progress::new())
+            let r = render_cached(&s, &p, &cs, Some(32), &mut RecordMemo3::new(), &Progress::new())
                 .unwrap_or_else(|e| panic!("{e}"));
             let e2 = rms(&lum(&r.reconstruction.image.medium), &reference).powi(2);
             ((e2 - noise2).max(0.0).sqrt(), r.placement.record_count())

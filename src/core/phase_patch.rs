@@ -139,7 +139,7 @@ fn solid_angle_density(n: DVec3, y: DVec3, x: DVec3) -> Taylor2<D3> {
 
 /// Radon's 7-point rule on a triangle, exact for polynomials of degree 5:
 /// barycentric points and weights (summing to 1).
-const RADON7: [([f64; 3], f64); 7] = {
+pub(crate) const RADON7: [([f64; 3], f64); 7] = {
     const A1: f64 = 0.059_715_871_789_770;
     const B1: f64 = 0.470_142_064_105_115;
     const W1: f64 = 0.132_394_152_788_506;

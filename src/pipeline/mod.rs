@@ -23,6 +23,7 @@ pub mod path;
 pub mod placement;
 pub mod probe;
 pub mod proxy;
+mod proxy_cut;
 pub mod record;
 pub mod sensor;
 pub mod sight;

@@ -32,7 +32,7 @@ use super::dim::Dim;
 use super::lobe::Lobe;
 use super::medium::Region;
 use super::path::{ScatteredSample, Settings, radiance_leaving, sample_at_each, scattered_with_slope};
-use super::silhouette::{RayEnd, find_edges};
+use super::silhouette::{Cut, RayEnd, Silhouettes, find_edges};
 use super::world::{DirectLight, Hit, World, ignore};
 use crate::core::color::Rgb;
 pub use crate::core::phase::Outgoing;
@@ -287,6 +287,9 @@ pub struct LightField<S: Dim> {
     pub rays: Vec<ProbeRay<S>>,
     /// Neighbouring directions (indices into `rays`), oriented.
     pub simplices: Vec<S::Simplex<u32>>,
+    /// Where a hit surface's silhouette cuts simplex edges whose hit vertex could
+    /// not move to it ([`super::silhouette::find_edges`]); sorted by ray pair.
+    pub cuts: Vec<Cut<S::Vec>>,
     /// Where the ray-marched medium samples sit and how thick each is.
     pub march: March,
     /// Delta lights seen from x, analytically.
@@ -297,6 +300,9 @@ pub struct LightField<S: Dim> {
     pub g: f64,
     /// Which angular factor weights the light arriving at x (`super::moments`).
     pub angular: Angular<S::Vec>,
+    /// The median length of the rays: the distance at which x's surroundings lie,
+    /// against which an element counts as near x ([`super::derivatives`]).
+    pub median_length: f64,
     /// Ray-casting queries spent.
     pub cost_rays: u64,
     pub seconds: f64,
@@ -588,9 +594,9 @@ fn trace_field<W: World>(
             length: r.length,
         })
         .collect();
-    let (edges, c) = find_edges(world, x, &ends, &simplices);
+    let Silhouettes { moved, cuts, rays: c } = find_edges(world, x, &ends, &simplices);
     cost += c;
-    for (ray, edge) in out.iter_mut().zip(edges) {
+    for (ray, edge) in out.iter_mut().zip(moved) {
         if let Some(h) = ray.hit.as_mut() {
             h.edge = edge;
         }
@@ -600,18 +606,27 @@ fn trace_field<W: World>(
     } else {
         (Vec::new(), 0)
     };
+    let mut lengths: Vec<f64> = out.iter().map(|r| r.length).collect();
+    let median_length = if lengths.is_empty() {
+        0.0
+    } else {
+        let mid = lengths.len() / 2;
+        *lengths.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
     Ok(LightField {
         x,
         omega_o: W::S::axis(0),
         eye: None,
         rays: out,
         simplices,
+        cuts,
         march,
         direct_lights,
         sigma_s: at_x.map_or(Rgb::ZERO, |m| m.sigma_s),
         sigma_t: sigma_t_x,
         g: at_x.map_or(0.0, |m| m.g()),
         angular: Angular::Phase,
+        median_length,
         cost_rays: cost + c,
         seconds: start.elapsed().as_secs_f64(),
     })

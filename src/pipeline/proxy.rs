@@ -33,7 +33,6 @@ use super::dim::Dim;
 use super::probe::LightField;
 use super::silhouette::BRIDGE_RATIO;
 use crate::core::color::Rgb;
-use crate::core::space::Space;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
@@ -95,9 +94,7 @@ impl<S: Dim> Element<S> {
     }
 }
 
-/// A vertex of an element: position, distance from x (for the rules), radiance,
-/// and where its transmittance and phase are evaluated.
-type Vertex<S> = (<S as Space>::Vec, f64, Rgb, <S as Space>::Vec);
+use super::proxy_cut::{Vertex, split_at_cuts};
 
 /// Where an element's vertices come from: its rays, and the shell of a medium
 /// element.
@@ -269,7 +266,31 @@ fn for_each_element<S: Dim>(lf: &LightField<S>, rule: RadianceRule, mut sink: im
         })
         .collect();
     let measure = |t: &S::Simplex<u32>| S::direction_measure(S::simplex(|k| lf.rays[t.as_ref()[k] as usize].dir));
+    // Which rays have cut edges (most simplices have none: no search for them).
+    let mut cut_from = vec![false; if lf.cuts.is_empty() { 0 } else { lf.rays.len() }];
+    for c in &lf.cuts {
+        cut_from[c.from as usize] = true;
+    }
     for t in &lf.simplices {
+        let cut = !cut_from.is_empty() && t.as_ref().iter().any(|&i| cut_from[i as usize]);
+        if let Some(pieces) = split_at_cuts(lf, t, &ends).filter(|_| cut) {
+            for p in pieces {
+                // The hit surface's side is one continuous surface; the other side
+                // bridges its edge and what lies behind, as below.
+                let rule = if p.bridging { rule } else { RadianceRule::Average };
+                let v = S::simplex(|k| p.v[k]);
+                let measure = S::direction_measure(S::simplex(|k| (p.v[k].0 - x) / S::length(p.v[k].0 - x)));
+                let mut e = make(x, v, rule, (ElementKind::Surface, p.bridging), measure, (*t, None));
+                if p.bridging && rule == RadianceRule::Farther {
+                    let far = (0..3)
+                        .max_by(|&i, &j| p.v[i].1.total_cmp(&p.v[j].1))
+                        .expect("three vertices");
+                    e.far_plane = p.far_normal.map(|n| (p.v[far].0, n));
+                }
+                sink(Piece::Element(e));
+            }
+            continue;
+        }
         let mut v: S::Simplex<Vertex<S>> = S::simplex(|k| ends[t.as_ref()[k] as usize]);
         // An escaped ray sees the background, which lies beyond anything hit: its
         // vertex is pushed behind the simplex's farthest hit (twice as far; its

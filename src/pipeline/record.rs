@@ -254,11 +254,16 @@ pub fn compute_record<W: World>(
     // Only a placement that limits reach by it pays for the boundary's check.
     let (nearest_edge, edge_rays) = match cs.edge_reach {
         Some(_) => {
-            let ends: Vec<_> = lf
+            // Silhouettes where vertices moved (2D) and where edges were cut (3D).
+            let moved = lf
                 .rays
                 .iter()
-                .filter_map(|r| r.hit.as_ref().and_then(|h| h.edge.map(|e| (h.point, h.normal, e))))
-                .collect();
+                .filter_map(|r| r.hit.as_ref().and_then(|h| h.edge.map(|e| (h.point, h.normal, e))));
+            let cut = lf.cuts.iter().filter_map(|c| {
+                let h = lf.rays[c.from as usize].hit.as_ref()?;
+                Some((h.point, h.normal, c.point))
+            });
+            let ends: Vec<_> = moved.chain(cut).collect();
             let (edge, rays) = nearest_boundary(world, x, &ends);
             let (light, light_rays) = nearest_point_light(world, &lf, probe.emitted);
             (edge.min(light), rays + light_rays)

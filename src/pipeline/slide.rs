@@ -141,3 +141,68 @@ pub fn transmittance_mean<S: Dim>(lf: &LightField<S>, a: S::Vec, b: S::Vec) -> [
     let h = 1e-3 * r.min(1.0 / lf.sigma_t.max_element().max(1e-12));
     Taylor2::central_differences(mean, x, h)
 }
+
+/// The mean of f·T (the angular factor times the transmittance) over a triangle
+/// element's directions, ∫ f T dω / Ω, by Radon's 7-point rule in the directions
+/// between its three (fixed) vertices, with derivatives in x (central differences,
+/// as [`transmittance_mean`] does in 2D).
+///
+/// Why: an element of one surface seen at a grazing angle (below an emitter, from
+/// a vertex d/Δθ from x's foot to the surface's edge) sees most of its directions
+/// near its nearest vertex, not at its centroid. With f·T taken at the centroid
+/// its error, differentiated, grew as 1/d: σ_s = 1e-4 below an emitter, gradient
+/// 5% off at d = 1e-5 and 50% at 1e-6; σ_s = 1, 8× at 1e-4.
+pub fn mean_over_directions<S: Dim>(lf: &LightField<S>, v: &[S::Vec]) -> [Taylor2<S>; 3] {
+    let mean = |x: S::Vec| {
+        let r: [f64; 3] = std::array::from_fn(|k| S::length(v[k] - x));
+        let u: [S::Vec; 3] = std::array::from_fn(|k| (v[k] - x) / r[k]);
+        let (mut sum, mut norm) = ([0.0; 3], 0.0);
+        for (b, w) in crate::core::phase_patch::RADON7 {
+            // The direction (Σ b_k u_k) meets the element's plane at
+            // x + p / Σ(b_k / r_k), and dω ∝ 1/|p|³ (a flat triangle of unit
+            // vectors projected onto the sphere).
+            let p = u[0] * b[0] + u[1] * b[1] + u[2] * b[2];
+            let len = S::length(p);
+            let y = x + p / (b[0] / r[0] + b[1] / r[1] + b[2] / r[2]);
+            let j = w / (len * len * len);
+            let ft = phase_transmittance_at(lf, x, y, true);
+            for c in 0..3 {
+                sum[c] += ft[c] * j;
+            }
+            norm += j;
+        }
+        sum.map(|s| s / norm)
+    };
+    let x = lf.x;
+    let r = v.iter().map(|&q| S::length(q - x)).fold(f64::INFINITY, f64::min);
+    let h = 1e-3 * r.min(1.0 / lf.sigma_t.max_element().max(1e-12));
+    Taylor2::central_differences(mean, x, h)
+}
+
+/// Whether the phase's lobe is wide against element `v` seen from x, so that
+/// [`mean_over_directions`]' seven directions resolve it: the element's angular
+/// radius is at most `ratio` times its angular distance from the lobe's axis plus
+/// the lobe's width 1 − |g| (the scale `core::phase_patch` splits by). Always for
+/// an isotropic phase or another angular factor.
+pub fn lobe_resolved<S: Dim>(lf: &LightField<S>, v: &[S::Vec], ratio: f64) -> bool {
+    use super::probe::{Angular, Outgoing};
+    if lf.angular != Angular::Phase || lf.g == 0.0 {
+        return true;
+    }
+    let unit = |w: S::Vec| w / S::length(w);
+    let angle = |a: S::Vec, b: S::Vec| 2.0 * (0.5 * S::length(a - b)).min(1.0).asin();
+    let x = lf.x;
+    let w = match lf.outgoing() {
+        Outgoing::Direction(w) => unit(w),
+        Outgoing::TowardsPoint(e) => unit(e - x),
+    };
+    let axis = if lf.g > 0.0 { -w } else { w };
+    let mut c = S::zero();
+    for &q in v {
+        c += unit(q - x);
+    }
+    let c = unit(c);
+    let rho = v.iter().map(|&q| angle(c, unit(q - x))).fold(0.0, f64::max);
+    let off = (angle(c, axis) - rho).max(0.0);
+    rho <= ratio * (off + 1.0 - lf.g.abs())
+}
