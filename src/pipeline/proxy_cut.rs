@@ -43,13 +43,16 @@ pub(super) fn split_at_cuts<S: Dim>(
     let h = (0..3).find(|&a| (0..3).any(|b| b != a && cut(a, b).is_some()))?;
     let ray = |a: usize| &lf.rays[idx[a] as usize];
     let hit = ray(h).hit.as_ref()?;
+    // The vertices on the hit surface's side: the cut ones, and hits at its depth
+    // or in its plane (a grazing plane's other primitives).
     let near: [bool; 3] = std::array::from_fn(|a| {
         a == h
             || (0..3).any(|b| b != a && cut(a, b).is_some())
-            || ray(a)
-                .hit
-                .as_ref()
-                .is_some_and(|ha| !sees_other(hit.prim, ray(h).length, Some(ha.prim), ray(a).length))
+            || ray(a).hit.as_ref().is_some_and(|ha| {
+                let coplanar = S::dot(ha.normal, hit.normal) > 1.0 - 1e-12
+                    && S::dot(hit.normal, ha.point - hit.point).abs() <= 1e-9 * ray(a).length.max(ray(h).length);
+                coplanar || !sees_other(hit.prim, ray(h).length, Some(ha.prim), ray(a).length)
+            })
     });
     // The polygons on either side of the silhouette, walking the triangle's edges.
     let (mut inside, mut outside): (Vec<Vertex<S>>, Vec<Vertex<S>>) = (vec![], vec![]);

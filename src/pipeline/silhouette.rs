@@ -72,6 +72,26 @@ pub fn find_edges<W: World>(
     rays: &[RayEnd<VecOf<W>>],
     simplices: &[<W::S as Dim>::Simplex<u32>],
 ) -> Silhouettes<VecOf<W>> {
+    // Which simplices each ray belongs to.
+    let mut star: Vec<Vec<usize>> = vec![Vec::new(); rays.len()];
+    for (k, t) in simplices.iter().enumerate() {
+        for &i in t.as_ref() {
+            star[i as usize].push(k);
+        }
+    }
+    // In 3D every silhouette is a cut instead of a move: a moved vertex puts one
+    // point of the edge in place and leaves the triangles to its neighbours short
+    // of it, or folds them (below an emitter at d = 1e-2, 4096 directions: gradient
+    // 73% off with moves where they did not fold, 0.02% with cuts).
+    if W::S::DIM == 3 {
+        let all: Vec<usize> = (0..rays.len()).filter(|&i| rays[i].prim.is_some()).collect();
+        let (cuts, cost) = cuts_of(world, x, rays, simplices, &star, &all);
+        return Silhouettes {
+            moved: vec![None; rays.len()],
+            cuts,
+            rays: cost,
+        };
+    }
     // Per ray, the candidate nearest to it in angle: the silhouette next to the ray.
     let mut best: Vec<Option<(f64, VecOf<W>)>> = vec![None; rays.len()];
     for t in simplices {
@@ -93,13 +113,6 @@ pub fn find_edges<W: World>(
                     *slot = Some((cos, c));
                 }
             }
-        }
-    }
-    // Which simplices each ray belongs to, to keep every one the way it turned.
-    let mut star: Vec<Vec<usize>> = vec![Vec::new(); rays.len()];
-    for (k, t) in simplices.iter().enumerate() {
-        for &i in t.as_ref() {
-            star[i as usize].push(k);
         }
     }
     let mut pos: Vec<VecOf<W>> = rays.iter().map(|r| r.prim.map_or(x + r.dir, |_| r.point)).collect();
@@ -126,10 +139,7 @@ pub fn find_edges<W: World>(
             .iter()
             .zip(&before)
             .any(|(&k, &b)| (turn(&simplices[k], &pos) * b).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
-        // In 3D every silhouette is a cut instead: a moved vertex puts one point of
-        // the edge in place and leaves the triangles to its neighbours short of it
-        // (measured below an emitter at d = 1e-2: gradient 50% off moved, 21% cut).
-        if folds || W::S::DIM == 3 {
+        if folds {
             pos[i] = old;
             refused.push(i);
             continue;
@@ -259,9 +269,8 @@ fn silhouette_along<W: World>(
         if W::S::dot(s.normal, n0) < 1.0 - 1e-9 || s.emission != e0 || s.reflectance != r0 {
             break;
         }
-        let Some(next) = world.silhouette(h.prim, x, w / len, d_out) else {
-            break;
-        };
+        // The surface reaches d_out's direction: no silhouette between them.
+        let next = world.silhouette(h.prim, x, w / len, d_out)?;
         (prev, c, cur) = (c, next, h.prim);
     }
     Some((c, cur, cost))
