@@ -242,7 +242,9 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         // f·T over the directions of a grazing or close piece, not at its centroid.
         let varies = lf.sigma_t.max_element() > 0.0 || !lf.angular_is_constant();
         let moment = matches!(lf.angular, Angular::Moment(_));
-        if settings.direction_mean && (grazing || close) && varies && !moment {
+        // (A vertex at x itself, a point on a surface, keeps the centroid rule:
+        // its directions are undefined.)
+        if settings.direction_mean && (grazing || close) && varies && !moment && near > 0.0 {
             let ft = slide::mean_over_directions(lf, v);
             return TaylorRgb::tint(S::form_factor_clamped(e.v, lf.x, 0.0), e.radiance).mul_channels(times_sigma_s(ft));
         }

@@ -287,8 +287,9 @@ pub struct LightField<S: Dim> {
     pub rays: Vec<ProbeRay<S>>,
     /// Neighbouring directions (indices into `rays`), oriented.
     pub simplices: Vec<S::Simplex<u32>>,
-    /// Where a hit surface's silhouette cuts simplex edges whose hit vertex could
-    /// not move to it ([`super::silhouette::find_edges`]); sorted by ray pair.
+    /// Where a hit surface's silhouette cuts simplex edges (3D; in 2D where the hit
+    /// vertex could not move to it, [`super::silhouette::find_edges`]); sorted by
+    /// ray pair.
     pub cuts: Vec<Cut<S::Vec>>,
     /// Where the ray-marched medium samples sit and how thick each is.
     pub march: March,

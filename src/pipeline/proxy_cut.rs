@@ -1,13 +1,15 @@
 //! Surface simplices split at the silhouette cuts of their edges (3D).
 //!
-//! Where a hit vertex cannot move to its surface's silhouette without folding the
-//! direction triangulation ([`super::silhouette::find_edges`]), the probe records
-//! where the silhouette crosses the simplex edges from that vertex towards
-//! neighbours that see nothing or something farther. A simplex with such a cut is
-//! split there: the near part (the hit surface up to its edge) becomes pieces of one
-//! continuous surface, the rest bridging pieces from the edge to what lies behind,
-//! as an element with a vertex at the silhouette would be. The cuts lie on shared
-//! edges, so neighbouring simplices split alike and the pieces tile the directions.
+//! In 3D the probe records where a hit surface's silhouette crosses the simplex
+//! edges from the hit's ray towards neighbours that see nothing or something
+//! farther ([`super::silhouette::find_edges`]) instead of moving the hit's vertex
+//! there (a moved vertex folded the direction triangulation, or put one point on
+//! the edge and left its neighbours' triangles short of it). A simplex with such a
+//! cut is split there: the near part (the hit surface up to its edge) becomes
+//! pieces of one continuous surface, the rest bridging pieces from the edge to what
+//! lies behind, as an element with a vertex at the silhouette would be. The cuts
+//! lie on shared edges, so neighbouring simplices split alike and the pieces tile
+//! the directions.
 
 use super::dim::Dim;
 use super::probe::LightField;
@@ -68,11 +70,7 @@ pub(super) fn split_at_cuts<S: Dim>(
             continue;
         }
         let (n, f) = if near[a] { (a, b) } else { (b, a) };
-        // A vertex that moved to its silhouette is its own cut.
-        let point = match (cut(n, f), ray(n).hit.as_ref().and_then(|h| h.edge)) {
-            (Some(c), _) | (None, Some(c)) => c,
-            (None, None) => return None,
-        };
+        let point = cut(n, f)?;
         let v: Vertex<S> = (point, S::length(point - lf.x), ends[idx[n] as usize].2, point);
         inside.push(v);
         outside.push(v);

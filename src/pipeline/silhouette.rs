@@ -42,9 +42,9 @@ pub struct Cut<V> {
 }
 
 /// The silhouettes next to a probe's hits: per ray, the point its vertex moves to
-/// (stored by the probe in `SurfaceHit::edge`); where that move would fold the
-/// triangulation, the cuts of the ray's simplex edges instead (sorted by ray
-/// pair); and the rays cast.
+/// (2D; stored by the probe in `SurfaceHit::edge`); in 3D, and where a move would
+/// fold the triangulation, the cuts of the ray's simplex edges instead (sorted by
+/// ray pair); and the rays cast.
 pub struct Silhouettes<V> {
     pub moved: Vec<Option<V>>,
     pub cuts: Vec<Cut<V>>,
@@ -62,10 +62,11 @@ pub fn sees_other(prim: u32, len: f64, prim_j: Option<u32>, len_j: f64) -> bool 
 }
 
 /// For every ray whose hit primitive ends between it and a neighbour that sees
-/// another depth (or nothing), the primitive's visible silhouette point, or where
-/// moving the ray's vertex there would fold the triangulation the silhouette's
-/// crossings of the simplex edges towards farther neighbours, and the shadow rays
-/// cast (one per candidate, to keep only edges x sees).
+/// another depth (or nothing): in 2D the primitive's visible silhouette point,
+/// where the ray's vertex moves; in 3D (and where a move would fold the
+/// triangulation) the silhouette's crossings of the simplex edges towards farther
+/// neighbours. With the shadow rays cast (one per candidate, to keep only edges x
+/// sees).
 pub fn find_edges<W: World>(
     world: &W,
     x: VecOf<W>,
@@ -161,7 +162,7 @@ pub fn find_edges<W: World>(
     }
 }
 
-/// The cuts of the simplex edges from each ray in `refused` (whose vertex cannot
+/// The cuts of the simplex edges from each ray in `from` (whose vertex does not
 /// move to its silhouette) towards the neighbours that see nothing or something
 /// farther: where its surface's silhouette crosses each such edge, if x sees it.
 ///
@@ -178,11 +179,11 @@ fn cuts_of<W: World>(
     rays: &[RayEnd<VecOf<W>>],
     simplices: &[<W::S as Dim>::Simplex<u32>],
     star: &[Vec<usize>],
-    refused: &[usize],
+    from: &[usize],
 ) -> (Vec<Cut<VecOf<W>>>, u64) {
     let mut cuts = Vec::new();
     let mut cost = 0;
-    for &i in refused {
+    for &i in from {
         let ri = &rays[i];
         let Some(prim) = ri.prim else { continue };
         let mut towards: Vec<u32> = star[i]
@@ -198,10 +199,9 @@ fn cuts_of<W: World>(
         towards.sort_unstable();
         towards.dedup();
         for j in towards {
-            let Some((c, last, rays_cast)) = silhouette_along(world, x, prim, ri, rays[j as usize].dir) else {
-                continue;
-            };
+            let (found, rays_cast) = silhouette_along(world, x, prim, ri, rays[j as usize].dir);
             cost += rays_cast;
+            let Some((c, last)) = found else { continue };
             let w = c - x;
             let len = W::S::length(w);
             if !(len > 0.0 && len.is_finite()) {
@@ -223,8 +223,8 @@ fn cuts_of<W: World>(
 /// Where the surface that ray `ri` hit (on `prim`) ends, seen along the arc from its
 /// direction towards `d_out`: the silhouette of its primitive, followed across
 /// coplanar primitives of the same material (a quad's two triangles, a mesh's
-/// flat faces), which are one surface to the light. The point, the primitive it
-/// lies on and the rays cast. Without following, a cut at a quad's diagonal left
+/// flat faces), which are one surface to the light: the point and the primitive it
+/// lies on (none where the surface reaches `d_out`), and the rays cast. Without following, a cut at a quad's diagonal left
 /// the rest of the quad to the bridging elements behind it.
 fn silhouette_along<W: World>(
     world: &W,
@@ -232,7 +232,7 @@ fn silhouette_along<W: World>(
     prim: u32,
     ri: &RayEnd<VecOf<W>>,
     d_out: VecOf<W>,
-) -> Option<(VecOf<W>, u32, u64)> {
+) -> (Option<(VecOf<W>, u32)>, u64) {
     use super::world::Hit;
     let props = |p: u32| {
         let s = world.surface(
@@ -248,7 +248,9 @@ fn silhouette_along<W: World>(
     };
     let (n0, e0, r0) = props(prim);
     let (mut cur, mut prev) = (prim, ri.point);
-    let mut c = world.silhouette(prim, x, ri.dir, d_out)?;
+    let Some(mut c) = world.silhouette(prim, x, ri.dir, d_out) else {
+        return (None, 0);
+    };
     let mut cost = 0;
     for _ in 0..16 {
         // Just beyond c on the line the arc's directions meet the plane in.
@@ -270,10 +272,12 @@ fn silhouette_along<W: World>(
             break;
         }
         // The surface reaches d_out's direction: no silhouette between them.
-        let next = world.silhouette(h.prim, x, w / len, d_out)?;
+        let Some(next) = world.silhouette(h.prim, x, w / len, d_out) else {
+            return (None, cost);
+        };
         (prev, c, cur) = (c, next, h.prim);
     }
-    Some((c, cur, cost))
+    (Some((c, cur)), cost)
 }
 
 /// The cut of the simplex edge from ray `from` towards ray `to`, if any (`cuts`
