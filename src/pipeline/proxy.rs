@@ -279,13 +279,9 @@ fn for_each_element<S: Dim>(lf: &LightField<S>, rule: RadianceRule, mut sink: im
                 // bridges its edge and what lies behind, as below.
                 let rule = if p.bridging { rule } else { RadianceRule::Average };
                 let v = S::simplex(|k| p.v[k]);
-                let measure = S::direction_measure(S::simplex(|k| (p.v[k].0 - x) / S::length(p.v[k].0 - x)));
-                let mut e = make(x, v, rule, (ElementKind::Surface, p.bridging), measure, (*t, None));
+                let mut e = make(x, v, rule, (ElementKind::Surface, p.bridging), p.measure, (*t, None));
                 if p.bridging && rule == RadianceRule::Farther {
-                    let far = (0..3)
-                        .max_by(|&i, &j| p.v[i].1.total_cmp(&p.v[j].1))
-                        .expect("three vertices");
-                    e.far_plane = p.far_normal.map(|n| (p.v[far].0, n));
+                    e.far_plane = p.far_plane;
                 }
                 sink(Piece::Element(e));
             }

@@ -21,12 +21,14 @@ use crate::core::space::Space;
 /// radiance, and where its transmittance and phase are evaluated.
 pub(super) type Vertex<S> = (<S as Space>::Vec, f64, Rgb, <S as Space>::Vec);
 
-/// A piece of a split simplex: its vertices, whether it bridges the silhouette and
-/// what lies behind, and then the far vertex's surface normal (if it is a hit).
+/// A piece of a split simplex: its vertices, the measure of its directions,
+/// whether it bridges the silhouette and what lies behind, and then the far
+/// surface's tangent plane (its farthest vertex and that hit's normal, if a hit).
 pub(super) struct CutPiece<S: Dim> {
     pub v: [Vertex<S>; 3],
+    pub measure: f64,
     pub bridging: bool,
-    pub far_normal: Option<S::Vec>,
+    pub far_plane: Option<(S::Vec, S::Vec)>,
 }
 
 /// The pieces of surface simplex `t` split at its edges' cuts; `None` when no edge
@@ -97,18 +99,17 @@ pub(super) fn split_at_cuts<S: Dim>(
             .find(|&a| !near[a] && ends[idx[a] as usize].0 == v.0)
             .and_then(|a| ray(a).hit.as_ref().map(|h| h.normal))
     };
-    let spans = |tri: &[Vertex<S>; 3]| {
-        let dirs = S::simplex(|k| (tri[k].0 - x) / S::length(tri[k].0 - x));
-        S::direction_measure(dirs) > 0.0
-    };
+    let measure = |tri: &[Vertex<S>; 3]| S::direction_measure(S::simplex(|k| (tri[k].0 - x) / S::length(tri[k].0 - x)));
     let mut pieces = Vec::new();
     for k in 1..inside.len().saturating_sub(1) {
         let v = [inside[0], inside[k], inside[k + 1]];
-        if spans(&v) {
+        let measure = measure(&v);
+        if measure > 0.0 {
             pieces.push(CutPiece {
                 v,
+                measure,
                 bridging: false,
-                far_normal: None,
+                far_plane: None,
             });
         }
     }
@@ -120,11 +121,13 @@ pub(super) fn split_at_cuts<S: Dim>(
         let far = (0..3)
             .max_by(|&i, &j| v[i].1.total_cmp(&v[j].1))
             .expect("three vertices");
-        if spans(&v) {
+        let measure = measure(&v);
+        if measure > 0.0 {
             pieces.push(CutPiece {
                 v,
+                measure,
                 bridging: dmax - dmin > BRIDGE_RATIO * dmin,
-                far_normal: far_normal(&outside[[0, k, k + 1][far]]),
+                far_plane: far_normal(&outside[[0, k, k + 1][far]]).map(|n| (v[far].0, n)),
             });
         }
     }
