@@ -13,6 +13,7 @@ use super::dim::Dim;
 use super::path::{Estimate, Parts, Query, Settings, estimate};
 use super::probe::{Angular, LightField, MediumSample, Outgoing, ProbeRay};
 use super::proxy::{Element, ElementKind, Proxy, RadianceRule};
+use super::proxy_cut::{corner_at, corner_on_line};
 use super::slide;
 use super::world::{DirectLight, World};
 use crate::core::color::{Rgb, luminance};
@@ -155,13 +156,47 @@ pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>) -> TaylorRgb
         // alike in both; a clamp scaled by each element's size broke that next to
         // surfaces (a long silhouette element clamped a near vertex its short
         // neighbour did not: gradient 26× off at 1e-5 from an emitter).
-        ElementKind::Surface => S::form_factor_clamped(e.v, lf.x, 0.0),
+        ElementKind::Surface => surface_form_factor(lf, e),
         // Shell pieces bridging an occluder's edge, beyond medium_clamp·Δt of x:
         // the angle (solid angle), times the thickness Δt carried in a medium
         // piece's radiance.
         ElementKind::Medium => S::form_factor(e.v, lf.x),
     };
     TaylorRgb::tint(form, e.radiance).mul_channels(transmittance_taylor_rgb::<S>(lf.sigma_t, lf.x, e.anchor, soft))
+}
+
+/// A surface element's angle (solid angle) from x, unclamped, with its
+/// derivatives; where a vertex is a corner sliding along a near silhouette
+/// ([`super::proxy_cut::Corner`]), they follow the slide: central differences of
+/// the closed form with the vertex placed anew at each x (the step far below the
+/// element's distance, O(h²) ≈ 1e-8 relative).
+fn surface_form_factor<S: Dim>(lf: &LightField<S>, e: &Element<S>) -> Taylor2<S> {
+    let fixed = || S::form_factor_clamped(e.v, lf.x, 0.0);
+    let Some(corner) = e.corner else { return fixed() };
+    let v = e.v.as_ref();
+    let Some(q) = corner_at::<S>(&corner, lf.x) else {
+        return fixed();
+    };
+    let k = (0..v.len())
+        .min_by(|&i, &j| S::length(v[i] - q).total_cmp(&S::length(v[j] - q)))
+        .expect("a simplex has vertices");
+    let near = v.iter().map(|&p| S::length(p - lf.x)).fold(f64::INFINITY, f64::min);
+    let h = 1e-4 * near;
+    let [ff] = Taylor2::central_differences(
+        |xp| {
+            let moved = S::simplex(|i| {
+                if i == k {
+                    corner_on_line::<S>(&corner, xp).unwrap_or(v[k])
+                } else {
+                    v[i]
+                }
+            });
+            [S::form_factor_clamped(moved, xp, 0.0).value]
+        },
+        lf.x,
+        h,
+    );
+    ff
 }
 
 /// A 3D surface element whose farthest vertex is this much farther from x than its
@@ -237,7 +272,7 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
             // An occlusion boundary: f·T by the vertex rule with the near vertices
             // sliding on the far surface (see `slide`).
             let ft = slide::vertex_rule(lf, e, plane, soft, true);
-            return TaylorRgb::tint(S::form_factor_clamped(e.v, lf.x, 0.0), e.radiance).mul_channels(times_sigma_s(ft));
+            return TaylorRgb::tint(surface_form_factor(lf, e), e.radiance).mul_channels(times_sigma_s(ft));
         }
         // f·T over the directions of a grazing or close piece, not at its centroid.
         let varies = lf.sigma_t.max_element() > 0.0 || !lf.angular_is_constant();
@@ -246,7 +281,7 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         // its directions are undefined.)
         if settings.direction_mean && (grazing || close) && varies && !moment && near > 0.0 {
             let ft = slide::mean_over_directions(lf, v);
-            return TaylorRgb::tint(S::form_factor_clamped(e.v, lf.x, 0.0), e.radiance).mul_channels(times_sigma_s(ft));
+            return TaylorRgb::tint(surface_form_factor(lf, e), e.radiance).mul_channels(times_sigma_s(ft));
         }
     }
     if let Some(c) = medium_shell_contribution(lf, e, medium_clamp) {

@@ -291,6 +291,9 @@ pub struct LightField<S: Dim> {
     /// vertex could not move to it, [`super::silhouette::find_edges`]); sorted by
     /// ray pair.
     pub cuts: Vec<Cut<S::Vec>>,
+    /// Where a farther surface's edge crosses a cut simplex edge beyond its cut
+    /// (3D; [`super::silhouette::Silhouettes::far_cuts`]), sorted by ray pair.
+    pub far_cuts: Vec<Cut<S::Vec>>,
     /// Where the ray-marched medium samples sit and how thick each is.
     pub march: March,
     /// Delta lights seen from x, analytically.
@@ -595,7 +598,12 @@ fn trace_field<W: World>(
             length: r.length,
         })
         .collect();
-    let Silhouettes { moved, cuts, rays: c } = find_edges(world, x, &ends, &simplices);
+    let Silhouettes {
+        moved,
+        cuts,
+        far_cuts,
+        rays: c,
+    } = find_edges(world, x, &ends, &simplices);
     cost += c;
     for (ray, edge) in out.iter_mut().zip(moved) {
         if let Some(h) = ray.hit.as_mut() {
@@ -621,6 +629,7 @@ fn trace_field<W: World>(
         rays: out,
         simplices,
         cuts,
+        far_cuts,
         march,
         direct_lights,
         sigma_s: at_x.map_or(Rgb::ZERO, |m| m.sigma_s),

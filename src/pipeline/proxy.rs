@@ -72,6 +72,9 @@ pub struct Element<S: Dim> {
     /// tangent plane (a point on it, its normal), onto which the near vertices slide
     /// as x moves ([`super::slide`]).
     pub far_plane: Option<(S::Vec, S::Vec)>,
+    /// A vertex that slides along a near silhouette as x moves, where it hides a
+    /// farther surface's edge (3D; see [`super::proxy_cut::Corner`]).
+    pub corner: Option<Corner<S::Vec>>,
     /// The rays (indices into [`LightField::rays`]) whose ends or samples the
     /// vertices are.
     pub rays: S::Simplex<u32>,
@@ -94,7 +97,7 @@ impl<S: Dim> Element<S> {
     }
 }
 
-use super::proxy_cut::{Vertex, split_at_cuts};
+use super::proxy_cut::{Corner, Vertex, split_at_cuts};
 
 /// Where an element's vertices come from: its rays, and the shell of a medium
 /// element.
@@ -126,6 +129,7 @@ fn make<S: Dim>(
         bridging,
         dir_measure,
         far_plane: None,
+        corner: None,
         rays,
         shell,
     }
@@ -282,6 +286,10 @@ fn for_each_element<S: Dim>(lf: &LightField<S>, rule: RadianceRule, mut sink: im
                 let mut e = make(x, v, rule, (ElementKind::Surface, p.bridging), p.measure, (*t, None));
                 if p.bridging && rule == RadianceRule::Farther {
                     e.far_plane = p.far_plane;
+                }
+                e.corner = p.corner;
+                if let Some(src) = p.source {
+                    (e.radiance, e.anchor) = (src.2, src.3);
                 }
                 sink(Piece::Element(e));
             }

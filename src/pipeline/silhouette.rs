@@ -13,10 +13,18 @@
 
 use super::dim::Dim;
 use super::world::World;
+use crate::core::color::Rgb;
 use crate::core::space::Space;
 use serde::Serialize;
 
 type VecOf<W> = <<W as World>::S as Space>::Vec;
+
+/// Cuts of a probe's simplex edges, sorted by ray pair.
+type Cuts<W> = Vec<Cut<VecOf<W>>>;
+
+/// Where a surface ends along an arc: the silhouette point, the primitive it lies
+/// on, and a point just beyond it (outwards, in the plane of the arc).
+type Edge<W> = (VecOf<W>, u32, VecOf<W>);
 
 /// Neighbouring ends whose depths differ by more than this fraction lie on two
 /// sides of a visibility boundary (the proxy calls such elements bridging).
@@ -39,6 +47,14 @@ pub struct Cut<V> {
     pub from: u32,
     pub to: u32,
     pub point: V,
+    /// The unit direction of the boundary edge through `point`, where the world
+    /// knows it (3D triangles; see [`World::edge_direction`]).
+    pub edge: Option<V>,
+    /// A far cut's surface: its radiance towards x where no probe ray measured it
+    /// (the emission of a surface seen only past the near silhouette), and its
+    /// normal facing x.
+    pub radiance: Option<Rgb>,
+    pub normal: Option<V>,
 }
 
 /// The silhouettes next to a probe's hits: per ray, the point its vertex moves to
@@ -48,6 +64,11 @@ pub struct Cut<V> {
 pub struct Silhouettes<V> {
     pub moved: Vec<Option<V>>,
     pub cuts: Vec<Cut<V>>,
+    /// Per cut, where the silhouette of what lies just beyond it, or of what the
+    /// far ray sees (whichever is nearer), crosses the rest of the simplex edge:
+    /// the edge of a farther surface partly hidden by the near one (3D; sorted by
+    /// ray pair, as `cuts`).
+    pub far_cuts: Vec<Cut<V>>,
     pub rays: u64,
 }
 
@@ -86,10 +107,11 @@ pub fn find_edges<W: World>(
     // 73% off with moves where they did not fold, 0.02% with cuts).
     if W::S::DIM == 3 {
         let all: Vec<usize> = (0..rays.len()).filter(|&i| rays[i].prim.is_some()).collect();
-        let (cuts, cost) = cuts_of(world, x, rays, simplices, &star, &all);
+        let (cuts, far_cuts, cost) = cuts_of(world, x, rays, simplices, &star, &all);
         return Silhouettes {
             moved: vec![None; rays.len()],
             cuts,
+            far_cuts,
             rays: cost,
         };
     }
@@ -154,10 +176,11 @@ pub fn find_edges<W: World>(
             edges[i] = Some(c);
         }
     }
-    let (cuts, c) = cuts_of(world, x, rays, simplices, &star, &refused);
+    let (cuts, far_cuts, c) = cuts_of(world, x, rays, simplices, &star, &refused);
     Silhouettes {
         moved: edges,
         cuts,
+        far_cuts,
         rays: cost + c,
     }
 }
@@ -180,8 +203,8 @@ fn cuts_of<W: World>(
     simplices: &[<W::S as Dim>::Simplex<u32>],
     star: &[Vec<usize>],
     from: &[usize],
-) -> (Vec<Cut<VecOf<W>>>, u64) {
-    let mut cuts = Vec::new();
+) -> (Cuts<W>, Cuts<W>, u64) {
+    let (mut cuts, mut far_cuts) = (Vec::new(), Vec::new());
     let mut cost = 0;
     for &i in from {
         let ri = &rays[i];
@@ -201,7 +224,7 @@ fn cuts_of<W: World>(
         for j in towards {
             let (found, rays_cast) = silhouette_along(world, x, prim, ri, rays[j as usize].dir);
             cost += rays_cast;
-            let Some((c, last)) = found else { continue };
+            let Some((c, last, beyond)) = found else { continue };
             let w = c - x;
             let len = W::S::length(w);
             if !(len > 0.0 && len.is_finite()) {
@@ -213,26 +236,118 @@ fn cuts_of<W: World>(
                     from: i as u32,
                     to: j,
                     point: c,
+                    edge: world.edge_direction(last, c),
+                    radiance: None,
+                    normal: None,
                 });
+                let (far, rays_cast) = far_cut(world, x, beyond, last, &rays[j as usize]);
+                cost += rays_cast;
+                if let Some(f) = far {
+                    far_cuts.push(Cut {
+                        from: i as u32,
+                        to: j,
+                        ..f
+                    });
+                }
             }
         }
     }
-    (cuts, cost)
+    (cuts, far_cuts, cost)
+}
+
+/// Past a cut (the point `beyond` just outside the near surface's silhouette, on
+/// primitive `near`), what x sees, against what the far ray `rj` sees: where they
+/// differ, the edge of the nearer of the two crosses the arc between their
+/// directions (a farther surface partly hidden by the near one: its visible part
+/// has a corner on the near silhouette, see `proxy_cut::Corner`). That crossing,
+/// if x sees it, with the edge's direction; the rays cast.
+fn far_cut<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    beyond: VecOf<W>,
+    near: u32,
+    rj: &RayEnd<VecOf<W>>,
+) -> (Option<Cut<VecOf<W>>>, u64) {
+    let w = beyond - x;
+    let len = W::S::length(w);
+    // (2D silhouettes are points: no corners.)
+    if W::S::DIM != 3 || !(len > 0.0 && len.is_finite()) {
+        return (None, 0);
+    }
+    let d = w / len;
+    let behind = world.closest_hit(x, d, f64::INFINITY, Some(near));
+    let mut cost = 1;
+    let (b_prim, b_len) = (
+        behind.as_ref().map(|h| h.prim),
+        behind.as_ref().map_or(f64::INFINITY, |h| h.t),
+    );
+    let differs = match b_prim {
+        Some(p) => sees_other(p, b_len, rj.prim, rj.length),
+        None => rj.prim.is_some(),
+    };
+    if !differs {
+        return (None, cost);
+    }
+    // The nearer surface's edge, towards the other's direction.
+    let (found, radiance) = match (&behind, rj.prim) {
+        (Some(h), pj) if pj.is_none() || h.t < rj.length => {
+            let s = world.surface(h, d);
+            let end = RayEnd {
+                dir: d,
+                prim: Some(h.prim),
+                point: s.point,
+                length: h.t,
+            };
+            let (found, c) = silhouette_along(world, x, h.prim, &end, rj.dir);
+            cost += c;
+            let emitted = if s.active { s.emission } else { Rgb::ZERO };
+            (found.map(|f| (f, Some(s.normal))), Some(emitted))
+        }
+        (_, Some(pj)) => {
+            let (found, c) = silhouette_along(world, x, pj, rj, d);
+            cost += c;
+            // Its radiance and normal are the far ray's own.
+            (found.map(|f| (f, None)), None)
+        }
+        _ => (None, None),
+    };
+    let Some(((c, last, _), normal)) = found else {
+        return (None, cost);
+    };
+    let wc = c - x;
+    let lc = W::S::length(wc);
+    if !(lc > 0.0 && lc.is_finite()) {
+        return (None, cost);
+    }
+    cost += 1;
+    if world.occluded(x, wc / lc, lc * (1.0 - 1e-9), Some(last)) {
+        return (None, cost);
+    }
+    let cut = Cut {
+        from: 0,
+        to: 0,
+        point: c,
+        edge: world.edge_direction(last, c),
+        radiance,
+        normal,
+    };
+    (Some(cut), cost)
 }
 
 /// Where the surface that ray `ri` hit (on `prim`) ends, seen along the arc from its
 /// direction towards `d_out`: the silhouette of its primitive, followed across
 /// coplanar primitives of the same material (a quad's two triangles, a mesh's
-/// flat faces), which are one surface to the light: the point and the primitive it
-/// lies on (none where the surface reaches `d_out`), and the rays cast. Without following, a cut at a quad's diagonal left
-/// the rest of the quad to the bridging elements behind it.
+/// flat faces), which are one surface to the light: the point, the primitive it
+/// lies on and a point just beyond it (none where the surface reaches `d_out`),
+/// and the rays cast. Without following, a cut at a quad's diagonal left the rest
+/// of the quad to the bridging elements behind it.
 fn silhouette_along<W: World>(
     world: &W,
     x: VecOf<W>,
     prim: u32,
     ri: &RayEnd<VecOf<W>>,
     d_out: VecOf<W>,
-) -> (Option<(VecOf<W>, u32)>, u64) {
+) -> (Option<Edge<W>>, u64) {
     use super::world::Hit;
     let props = |p: u32| {
         let s = world.surface(
@@ -277,15 +392,20 @@ fn silhouette_along<W: World>(
         };
         (prev, c, cur) = (c, next, h.prim);
     }
-    (Some((c, cur)), cost)
+    (Some((c, cur, c + (c - prev) * 1e-6)), cost)
 }
 
 /// The cut of the simplex edge from ray `from` towards ray `to`, if any (`cuts`
 /// sorted by ray pair, as [`find_edges`] makes them).
 pub fn cut_between<V: Copy>(cuts: &[Cut<V>], from: u32, to: u32) -> Option<V> {
+    cut_of(cuts, from, to).map(|c| c.point)
+}
+
+/// The cut of the simplex edge from ray `from` towards ray `to`, if any.
+pub fn cut_of<V: Copy>(cuts: &[Cut<V>], from: u32, to: u32) -> Option<&Cut<V>> {
     cuts.binary_search_by(|c| (c.from, c.to).cmp(&(from, to)))
         .ok()
-        .map(|k| cuts[k].point)
+        .map(|k| &cuts[k])
 }
 
 /// Distance from x to the nearest silhouette point among `ends` (hit point, unit

@@ -111,6 +111,13 @@ pub trait World: Sync {
     /// span (in 2D, the segment's end between them), if there is one.
     fn silhouette(&self, prim: u32, x: VecOf<Self>, d_in: VecOf<Self>, d_out: VecOf<Self>) -> Option<VecOf<Self>>;
 
+    /// The unit direction of primitive `prim`'s boundary edge through `p` (a point
+    /// [`Self::silhouette`] returned), where the boundary has one (3D); `None` in 2D,
+    /// where a silhouette is a point.
+    fn edge_direction(&self, _prim: u32, _p: VecOf<Self>) -> Option<VecOf<Self>> {
+        None
+    }
+
     /// The surface point of `hit`, found by a ray travelling along `dir`.
     fn surface(&self, hit: &Hit, dir: VecOf<Self>) -> SurfacePoint<Self::S>;
 

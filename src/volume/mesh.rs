@@ -335,6 +335,21 @@ pub fn triangle_silhouette(tri: &Triangle, x: DVec3, d_in: DVec3, d_out: DVec3) 
     best.map(|(_, c)| c)
 }
 
+/// The unit direction of the edge of `tri` nearest `p` (a point on its boundary),
+/// `None` for a degenerate edge.
+pub fn triangle_edge_through(tri: &Triangle, p: DVec3) -> Option<DVec3> {
+    let v = tri.vertices();
+    let off_line = |k: usize| {
+        let (a, b) = (v[k], v[(k + 1) % 3]);
+        let d = (b - a).normalize_or_zero();
+        let w = p - a;
+        (w - d * w.dot(d)).length_squared()
+    };
+    let k = (0..3).min_by(|&i, &j| off_line(i).total_cmp(&off_line(j)))?;
+    let d = (v[(k + 1) % 3] - v[k]).normalize_or_zero();
+    (d != DVec3::ZERO).then_some(d)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -53,6 +53,10 @@ impl World for Scene {
         super::mesh::triangle_silhouette(&self.geometry.prims[prim as usize], x, d_in, d_out)
     }
 
+    fn edge_direction(&self, prim: u32, p: DVec3) -> Option<DVec3> {
+        super::mesh::triangle_edge_through(&self.geometry.prims[prim as usize], p)
+    }
+
     fn surface(&self, hit: &Hit, dir: DVec3) -> SurfacePoint<D3> {
         let tri = &self.geometry.prims[hit.prim as usize];
         let surf = &self.surfaces[tri.shape as usize];
