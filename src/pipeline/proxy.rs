@@ -288,6 +288,8 @@ fn for_each_element<S: Dim>(lf: &LightField<S>, rule: RadianceRule, mut sink: im
                     e.far_plane = p.far_plane;
                 }
                 e.corner = p.corner;
+                // The sides of a farther surface's edge carry what they see, under
+                // either rule (see `proxy_cut::edge_split`).
                 if let Some(src) = p.source {
                     (e.radiance, e.anchor) = (src.2, src.3);
                 }
