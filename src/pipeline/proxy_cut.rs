@@ -213,13 +213,13 @@ pub(super) fn split_at_cuts<S: Dim>(
             if measure > 0.0 {
                 // The sliding vertex is the corner's only where the piece has it.
                 let slides = corner.filter(|(_, q)| v.iter().any(|p| p.0 == *q));
+                // The surface behind the piece: its side's source, else its farthest vertex.
+                let (far_point, far_normal) = source.map_or((v[far].0, tri[far].2), |s| (s.0.0, s.2));
                 pieces.push(CutPiece {
                     v,
                     measure,
                     bridging: dmax - dmin > BRIDGE_RATIO * dmin,
-                    far_plane: source
-                        .map_or(tri[far].2, |s| s.2)
-                        .map(|n| (source.map_or(v[far].0, |s| s.0.0), n)),
+                    far_plane: far_normal.map(|n| (far_point, n)),
                     corner: slides.map(|(c, _)| c),
                     source: source.map(|s| s.0),
                 });
