@@ -8,6 +8,7 @@ pub mod element;
 pub mod equal_count;
 pub mod free_flight;
 pub mod harmonics;
+mod lobe_boundary;
 pub mod metric;
 pub mod mis;
 pub mod phase;

@@ -20,6 +20,7 @@ use crate::core::color::{Rgb, luminance};
 use crate::core::distance::distance;
 use crate::core::element::{medium_form_factor_smoothed, medium_softening, near_distance};
 use crate::core::metric::hessian_radiance_floor;
+use crate::core::phase_patch::Resolution;
 use crate::core::space::Space;
 use crate::core::taylor::Taylor2;
 use crate::core::taylor_rgb::TaylorRgb;
@@ -264,7 +265,11 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
             // 30× slower (`tests/extreme_grid.rs`); 4096 directions at g = 0.99 need
             // ≈ 500 around the lobe's axis.
             let max_pieces = (lf.rays.len() / 4).clamp(16, 1024);
-            if let Some(ft) = S::lobe_integral(lf.g, e.v, lf.x, lf.outgoing(), sigma_t, max_pieces) {
+            let res = Resolution {
+                boundary: close,
+                ..Resolution::at(max_pieces, near / lf.median_length)
+            };
+            if let Some(ft) = S::lobe_integral(lf.g, e.v, lf.x, lf.outgoing(), sigma_t, res) {
                 return TaylorRgb::tint(Taylor2::constant(1.0), e.radiance).mul_channels(times_sigma_s(ft));
             }
         }

@@ -13,7 +13,7 @@ use super::directions;
 use crate::core::element::{segment_form_factor, segment_form_factor_clamped};
 use crate::core::phase::{Hg2, Hg3, Outgoing};
 use crate::core::phase_arc::phase_weighted_angle;
-use crate::core::phase_patch::lobe_integral;
+use crate::core::phase_patch::{Resolution, lobe_integral};
 use crate::core::rng::Sampler;
 use crate::core::space::{D2, D3, Space};
 use crate::core::taylor::Taylor2;
@@ -103,7 +103,7 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     ) -> Option<Taylor2<Self>>;
     /// ∫ f T dω over the simplex's directions (an oriented simplex), per channel of
     /// the extinction, with its derivatives, where the phase's lobe turns within the
-    /// simplex (3D: `core::phase_patch`, at most `max_pieces` split pieces and a
+    /// simplex (3D: `core::phase_patch`, split pieces as fine as `res` and a
     /// degree-5 area rule); `None` where one point of the simplex serves, and
     /// always in 2D (the closed form [`Dim::phase_weighted_form`] integrates the
     /// phase there).
@@ -113,7 +113,7 @@ pub trait Dim: Space<Vec: Serialize + Default> {
         x: Self::Vec,
         out: Outgoing<Self::Vec>,
         sigma_t: [f64; 3],
-        max_pieces: usize,
+        res: Resolution,
     ) -> Option<[Taylor2<Self>; 3]>;
 }
 
@@ -244,7 +244,7 @@ impl Dim for D2 {
         _: DVec2,
         _: Outgoing<DVec2>,
         _: [f64; 3],
-        _: usize,
+        _: Resolution,
     ) -> Option<[Taylor2<D2>; 3]> {
         None
     }
@@ -353,8 +353,8 @@ impl Dim for D3 {
         x: DVec3,
         out: Outgoing<DVec3>,
         sigma_t: [f64; 3],
-        max_pieces: usize,
+        res: Resolution,
     ) -> Option<[Taylor2<D3>; 3]> {
-        lobe_integral(g, v, x, out, sigma_t, max_pieces)
+        lobe_integral(g, v, x, out, sigma_t, res)
     }
 }
