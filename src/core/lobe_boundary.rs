@@ -18,10 +18,20 @@
 //! depends on the edge alone, taken in a canonical order), so the terms of every
 //! inner edge cancel to rounding and only the outer boundary of the elements that
 //! use this form remains, where the 1D rule is refined to the lobe and to 1/r³.
-//! The derivatives along the normal keep the area rule. With ω_o turning with x
-//! (light towards a point) the part of the derivatives from ω_o's turn is the area
-//! rule's difference between the turning and the held direction.
+//! Along the normal, the plane's points are moved with x so that they keep their
+//! directions (see [`with_edge_derivatives`]): that too leaves edge integrals,
+//! plus an area term from the transmittance alone, and the value is taken over
+//! the directions on bands where the distance halves (an element next to a
+//! surface can reach from r ≈ d to 10⁶ d). With ω_o turning with x (light towards
+//! a point) the part of the derivatives from ω_o's turn is the area rule's
+//! difference between the turning and the held direction, but for the cross
+//! term of the Hessian very close to a surface (`phase_patch::lobe_integral`).
+//!
+//! Measured below an emitter (`tests/near_surface_3d.rs`, 4096 directions) from
+//! d = 1e-1 to 1e-8: gradient within 0.25%, Hessian within 3% wherever the
+//! reference can tell (g 0, 0.6, 0.99 along ω_o and towards an eye, g −0.9).
 
+use super::graded_rule::graded_nodes;
 use super::phase::{Outgoing, phase_taylor_out};
 use super::space::D3;
 use super::taylor::Taylor2;
@@ -45,6 +55,7 @@ const EDGE_RATIO: f64 = 0.05;
 const EDGE_LEVELS: u32 = 24;
 
 /// What the edge integrals need of the lobe and the medium.
+#[derive(Clone, Copy)]
 pub(super) struct Lobe {
     pub g: f64,
     /// ω_o held at x (light leaving along it).
@@ -86,12 +97,24 @@ fn angle(a: DVec3, b: DVec3) -> f64 {
     2.0 * (0.5 * (a - b).length()).min(1.0).asin()
 }
 
-/// ∫ F ds along the segment a–b (value and x-gradient per channel), by Gauss–
-/// Legendre on pieces halved until small against their distance and the lobe.
-/// The caller passes the ends in a canonical order, so that both elements of an
-/// edge get the same nodes and the same sum.
-fn edge_integral(lobe: &Lobe, n: DVec3, a: DVec3, b: DVec3, x: DVec3) -> [(f64, DVec3); 3] {
-    let mut sum = [(0.0, DVec3::ZERO); 3];
+/// One edge's integrals for one channel (ν the edge's outward normal in the plane,
+/// q = ν·(y − x)/h and ρ = |y − x|/h with h = n·(y − x), x's height):
+/// ∫F ds, ∫∇F ds, ∫F q ds, ∫∂_n(F q) ds and ∫F ρ q ds.
+#[derive(Clone, Copy, Default)]
+struct EdgeSums {
+    f: f64,
+    grad: DVec3,
+    fq: f64,
+    fq_n: f64,
+    fqr: f64,
+}
+
+/// [`EdgeSums`] along the segment a–b per channel, by Gauss–Legendre on pieces
+/// halved until small against their distance and the lobe. The caller passes the
+/// ends in a canonical order, so that both elements of an edge get the same nodes
+/// and sums of opposite sign.
+fn edge_integral(lobe: &Lobe, n: DVec3, nu: DVec3, a: DVec3, b: DVec3, x: DVec3) -> [EdgeSums; 3] {
+    let mut sum = [EdgeSums::default(); 3];
     let mut stack = vec![(a, b, 0u32)];
     while let Some((p, q, level)) = stack.pop() {
         let len = (q - p).length();
@@ -109,29 +132,91 @@ fn edge_integral(lobe: &Lobe, n: DVec3, a: DVec3, b: DVec3, x: DVec3) -> [(f64, 
         }
         for (t, w) in GAUSS5 {
             let y = p + (q - p) * t;
+            let (along, h, r) = (nu.dot(y - x), n.dot(y - x), (y - x).length());
+            let (qv, rho) = (along / h, r / h);
+            let w = w * len;
             for (s, f) in sum.iter_mut().zip(lobe.integrand(n, y, x)) {
-                s.0 += f.value * w * len;
-                s.1 += f.grad * (w * len);
+                s.f += f.value * w;
+                s.grad += f.grad * w;
+                s.fq += f.value * qv * w;
+                // ∂_n q = along/h² (∂_x h = −n, ∂_x along = −ν ⊥ n).
+                s.fq_n += (n.dot(f.grad) * qv + f.value * along / (h * h)) * w;
+                s.fqr += f.value * qv * rho * w;
             }
         }
     }
     sum
 }
 
-/// The area rule's derivatives `area` (per channel, ω_o held, of the triangle `v`
-/// whose plane has unit normal `n` facing away from x) with every derivative that
-/// has an index along the plane replaced by its edge form. The value and the
-/// second derivative along n stay the area rule's.
+/// The solid angle of triangle `v` seen from `x` (Van Oosterom and Strackee).
+fn solid_angle(v: [DVec3; 3], x: DVec3) -> f64 {
+    let [a, b, c] = v.map(|p| p - x);
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let det = a.dot(b.cross(c)).abs();
+    let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+    2.0 * det.atan2(den)
+}
+
+/// ∫F dA, ∫F ρ dA and ∫F ρ² dA over `pieces` (one plane of unit normal `n`
+/// facing away from x) per channel: each piece's solid angle times the mean of
+/// f T ρᵏ over its directions, by Radon's rule on bands where the distance halves
+/// (`graded_rule`), since an element next to a surface can reach from r ≈ d to
+/// 10⁶ d, where its area rule saw only its near part. Values only.
+fn moments(lobe: &Lobe, pieces: &[[DVec3; 3]], n: DVec3, x: DVec3) -> [[f64; 3]; 3] {
+    let mut sum = [[0.0; 3]; 3];
+    for &t in pieces {
+        let r = t.map(|p| (p - x).length());
+        let u: [DVec3; 3] = std::array::from_fn(|k| (t[k] - x) / r[k]);
+        let mut mean = [[0.0; 3]; 3];
+        let mut norm = 0.0;
+        for (b, w) in graded_nodes(r) {
+            // The direction Σ b_k u_k meets the plane at x + p / Σ(b_k / r_k);
+            // dω ∝ 1/|p|³ (a flat triangle of unit vectors projected onto the sphere).
+            let p = u[0] * b[0] + u[1] * b[1] + u[2] * b[2];
+            let len = p.length();
+            let y = x + p / (b[0] / r[0] + b[1] / r[1] + b[2] / r[2]);
+            let j = w / (len * len * len);
+            let rho = (y - x).length() / n.dot(y - x);
+            let f = phase_taylor_out::<D3>(lobe.g, x, y, Outgoing::Direction(lobe.out), 0.0).value;
+            for (m, st) in mean.iter_mut().zip(lobe.sigma_t) {
+                let ft = f * (-st.max(0.0) * (y - x).length()).exp() * j;
+                m[0] += ft;
+                m[1] += ft * rho;
+                m[2] += ft * rho * rho;
+            }
+            norm += j;
+        }
+        let omega = solid_angle(t, x);
+        for (s, m) in sum.iter_mut().zip(mean) {
+            for k in 0..3 {
+                s[k] += omega * m[k] / norm;
+            }
+        }
+    }
+    sum
+}
+
+/// The derivatives of ∫F dA over the triangle `v` (per channel, ω_o held; the
+/// plane's unit normal `n` faces away from x) as edge integrals; `pieces` is
+/// the triangle's split, over which its value is integrated.
+///
+/// Along the plane (t), ∂_t ∫F = −∮F ν_t ds (F depends on y − x). Along n, the
+/// points of the plane are moved with x so that each keeps its direction from x
+/// (y − x scaled by h′/h): f and the solid angle of dA are held along that flow
+/// and only T(r) changes, so ∂_n ∫F = ∮F q ds + σ ∫F ρ dA, and once more,
+/// ∂_n ∫Fρ = ∮Fρq ds + σ ∫Fρ² dA (ρ is held along the flow). Every second
+/// derivative is the derivative of an edge integral at fixed nodes, except the
+/// σ² term, whose area rule is not differentiated.
 pub(super) fn with_edge_derivatives(
     lobe: &Lobe,
     v: [DVec3; 3],
+    pieces: &[[DVec3; 3]],
     n: DVec3,
     x: DVec3,
-    area: [Taylor2<D3>; 3],
 ) -> [Taylor2<D3>; 3] {
-    // Σ_e ν_e ∫_e F ds and Σ_e ν_e ⊗ ∫_e ∇F ds, ν_e the outward normal in the plane.
     let mut flux = [DVec3::ZERO; 3];
     let mut flux_grad = [DMat3::ZERO; 3];
+    let mut normal = [EdgeSums::default(); 3];
     for k in 0..3 {
         let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
         let mut nu = (b - a).cross(n).normalize_or_zero();
@@ -140,28 +225,32 @@ pub(super) fn with_edge_derivatives(
         }
         let canonical = (a.x, a.y, a.z) < (b.x, b.y, b.z);
         let (p, q) = if canonical { (a, b) } else { (b, a) };
-        for (ch, (value, grad)) in edge_integral(lobe, n, p, q, x).into_iter().enumerate() {
-            flux[ch] += nu * value;
+        for (ch, e) in edge_integral(lobe, n, nu, p, q, x).into_iter().enumerate() {
+            flux[ch] += nu * e.f;
             // (∇F) νᵀ: column j is ∇F ν_j.
-            flux_grad[ch] += DMat3::from_cols(grad * nu.x, grad * nu.y, grad * nu.z);
+            flux_grad[ch] += DMat3::from_cols(e.grad * nu.x, e.grad * nu.y, e.grad * nu.z);
+            normal[ch].fq += e.fq;
+            normal[ch].fq_n += e.fq_n;
+            normal[ch].fqr += e.fqr;
         }
     }
+    let moments = moments(lobe, pieces, n, x);
     let nn = DMat3::from_cols(n * n.x, n * n.y, n * n.z);
     let tangent = DMat3::IDENTITY - nn;
     std::array::from_fn(|ch| {
-        let a = area[ch];
-        // ∂_t ∫F = −∮ F ν_t ds; the normal part from the area rule.
-        let grad = -flux[ch] + n * n.dot(a.grad);
-        // H P = −∮ ∇F νᵀ ds (columns along the plane); H n from its transpose's
-        // rows along the plane and the area rule's n·H·n.
+        let sigma = lobe.sigma_t[ch].max(0.0);
+        let [m0, m1, m2] = moments[ch];
+        let grad = -flux[ch] + n * (normal[ch].fq + sigma * m1);
+        // H P = −∮ ∇F νᵀ ds (columns along the plane); H's column n along the
+        // plane from its transpose; n·H·n from the flow twice.
         let m = -flux_grad[ch];
         let tt = tangent * m * tangent;
         let tt = (tt + tt.transpose()) * 0.5;
-        let tn = tangent * m.transpose() * n; // H's column n, part along the plane
-        let h_nn = n.dot(a.hess * n);
+        let tn = tangent * m.transpose() * n;
+        let h_nn = normal[ch].fq_n + sigma * (normal[ch].fqr + sigma * m2);
         let col_n = DMat3::from_cols(tn * n.x, tn * n.y, tn * n.z); // tn nᵀ
         let hess = tt + col_n + col_n.transpose() + nn * h_nn;
-        Taylor2::new(a.value, grad, hess)
+        Taylor2::new(m0, grad, hess)
     })
 }
 
@@ -177,13 +266,14 @@ mod tests {
     fn integral(v: [DVec3; 3], x: DVec3, out: Outgoing<DVec3>, boundary: bool) -> Taylor2<D3> {
         let res = Resolution {
             boundary,
+            turn_by_edges: boundary,
             ..Resolution::at(4096, 1.0)
         };
         lobe_integral(0.9, v, x, out, [0.7, 1.0, 2.0], res).expect("the lobe needs a split")[2]
     }
 
     /// Where the area rule is accurate (x well away from the triangle), the edge
-    /// form gives the same derivatives, for light leaving along a direction and
+    /// form gives the same value and derivatives, for light leaving along a direction and
     /// towards a point, and for either orientation of the triangle.
     #[test]
     fn the_edge_form_agrees_with_the_area_rule() {
@@ -200,8 +290,8 @@ mod tests {
             for v in [v, [v[0], v[2], v[1]]] {
                 let (area, edges) = (integral(v, x, out, false), integral(v, x, out, true));
                 eprintln!("{:?}\n{:?}", area.grad, edges.grad);
-                // Measured ≤ 1e-9 relative.
-                assert_eq!(area.value, edges.value);
+                // Measured ≤ 1e-8 relative.
+                assert!((area.value - edges.value).abs() < 1e-7 * area.value.abs());
                 assert!((area.grad - edges.grad).length() < 1e-7 * area.grad.length());
                 assert!(max_abs(area.hess - edges.hess) < 1e-6 * max_abs(area.hess));
             }

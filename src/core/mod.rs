@@ -7,6 +7,7 @@ pub mod distance;
 pub mod element;
 pub mod equal_count;
 pub mod free_flight;
+pub mod graded_rule;
 pub mod harmonics;
 mod lobe_boundary;
 pub mod metric;

@@ -25,12 +25,13 @@
 //! the degree-5 rule at 0.25 gave 10×, at 0.12 0.15; an element threshold of 0.05
 //! instead of 0.03 left the g = 0.9 Hessian 1.6× off at 16384 directions (0.17).
 
+use super::graded_rule::RADON7;
 use super::lobe_boundary::{Lobe, solid_angle_density, with_edge_derivatives};
 use super::phase::{G_MAX, Outgoing, phase_taylor_out};
 use super::space::D3;
 use super::taylor::Taylor2;
 use super::transmittance::transmittance_taylor;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::collections::VecDeque;
 
 /// An element is integrated piecewise ([`lobe_integral`]) where its angular radius
@@ -44,6 +45,13 @@ pub const SPLIT_RATIO: f64 = 0.12;
 /// The closeness (see [`Resolution::at`]) below which pieces are split finer than
 /// [`SPLIT_RATIO`], and the rate: the split ratio falls as its sixth root.
 pub const CLOSE_SCALE: f64 = 1e-4;
+/// The closeness below which [`Resolution::turn_by_edges`] is wanted: at 1.4e-3
+/// (an emitter 0.01 away, light towards a point 2.6 away) the area rule's cross
+/// term left the Hessian 2% off at g = 0.99 and 0.06% at g = 0.6, and its error
+/// grows as 1/closeness; the edge form costs four more edge forms and area rules
+/// per element (lamp_fog.json's placement: +33% time when taken for every close
+/// element).
+pub const TURN_CLOSE: f64 = 1e-3;
 /// At most this many levels of splitting: 0.03 rad (a 4096-direction element) down
 /// to 1.2e-4 rad, pieces for lobes down to 1 − |g| ≈ 1e-3; narrower lobes are
 /// integrated at that resolution. Only pieces near the axis split further, so a
@@ -68,6 +76,11 @@ pub struct Resolution {
     /// form (`core::lobe_boundary`), so that they cancel exactly between
     /// neighbours.
     pub boundary: bool,
+    /// With light towards a point, the cross term of ω_o's turn in the Hessian
+    /// takes the edge form too (five edge forms instead of one; see
+    /// [`lobe_integral`]): wanted where the element is far closer to x than the
+    /// probe's typical ray length ([`TURN_CLOSE`]).
+    pub turn_by_edges: bool,
 }
 
 impl Resolution {
@@ -87,6 +100,7 @@ impl Resolution {
             max_pieces,
             split_ratio: SPLIT_RATIO * finer.min(1.0),
             boundary: false,
+            turn_by_edges: false,
         }
     }
 }
@@ -157,26 +171,6 @@ fn lobe_pieces(g: f64, v: [DVec3; 3], x: DVec3, out: Outgoing<DVec3>, res: Resol
     Some(pieces)
 }
 
-/// Radon's 7-point rule on a triangle, exact for polynomials of degree 5:
-/// barycentric points and weights (summing to 1).
-pub(crate) const RADON7: [([f64; 3], f64); 7] = {
-    const A1: f64 = 0.059_715_871_789_770;
-    const B1: f64 = 0.470_142_064_105_115;
-    const W1: f64 = 0.132_394_152_788_506;
-    const A2: f64 = 0.797_426_985_353_087;
-    const B2: f64 = 0.101_286_507_323_456;
-    const W2: f64 = 0.125_939_180_544_827;
-    [
-        ([1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], 0.225),
-        ([A1, B1, B1], W1),
-        ([B1, A1, B1], W1),
-        ([B1, B1, A1], W1),
-        ([A2, B2, B2], W2),
-        ([B2, A2, B2], W2),
-        ([B2, B2, A2], W2),
-    ]
-};
-
 /// ∫ f(−ω·ω_o) T(x, y(ω)) dω over the directions from `x` to the triangle `v`
 /// (oriented so that its solid angle is positive), per channel of the extinction
 /// `sigma_t`, with gradients and Hessians in x; `None` where the triangle needs no
@@ -200,14 +194,19 @@ pub fn lobe_integral(
     res: Resolution,
 ) -> Option<[Taylor2<D3>; 3]> {
     let pieces = lobe_pieces(g, v, x, out, res)?;
-    let sum = area_rule(g, &pieces, x, out, sigma_t);
     if !res.boundary {
-        return Some(sum);
+        return Some(area_rule(g, &pieces, x, out, sigma_t));
     }
     // The plane's normal facing away from x, and the sign of the oriented integral.
     let cross = (v[1] - v[0]).cross(v[2] - v[0]);
     let n = cross.try_normalize()?;
     let sign = if n.dot(v[0] - x) >= 0.0 { 1.0 } else { -1.0 };
+    // x in the element's plane (seen edge-on, or on it): no height to move along.
+    let near = v.iter().map(|&p| (p - x).length()).fold(f64::INFINITY, f64::min);
+    let height = n.dot(v[0] - x).abs();
+    if height.is_nan() || height <= 1e-9 * near {
+        return Some(area_rule(g, &pieces, x, out, sigma_t));
+    }
     let g = g.clamp(-G_MAX, G_MAX);
     let held = match out {
         Outgoing::Direction(w) => w,
@@ -221,14 +220,53 @@ pub fn lobe_integral(
         width: 1.0 - g.abs(),
         sigma_t,
     };
-    // With ω_o turning with x, its turn's share is the area rule's difference
-    // between the turning and the held direction.
-    let held_sum = match out {
-        Outgoing::Direction(_) => sum,
-        Outgoing::TowardsPoint(_) => area_rule(g, &pieces, x, Outgoing::Direction(held), sigma_t),
+    let edge_form = |w: DVec3| {
+        let lobe = Lobe {
+            out: w,
+            axis: if g > 0.0 { -w } else { w },
+            ..lobe
+        };
+        with_edge_derivatives(&lobe, v, &pieces, n * sign, x).map(|t| t * sign)
     };
-    let edges = with_edge_derivatives(&lobe, v, n * sign, x, held_sum.map(|t| t * sign));
-    Some(std::array::from_fn(|c| edges[c] * sign + (sum[c] - held_sum[c])))
+    let edges = edge_form(held);
+    let Outgoing::TowardsPoint(e) = out else {
+        return Some(edges);
+    };
+    // With ω_o turning with x (light towards e), its turn's share is the area
+    // rule's difference between the turning and the held direction (their values
+    // are equal), except the cross term ∇_x(∂_ω J)·∇ω, whose every element's share
+    // grows as 1/d like the plain derivatives: it is taken from the edge form at
+    // ω_o turned by ±δ along two tangents, in place of the area rule's.
+    let turning = area_rule(g, &pieces, x, out, sigma_t);
+    let held_area = area_rule(g, &pieces, x, Outgoing::Direction(held), sigma_t);
+    if !res.turn_by_edges {
+        return Some(std::array::from_fn(|ch| edges[ch] + (turning[ch] - held_area[ch])));
+    }
+    let delta = 1e-3 * (1.0 - g.abs()).max(1e-3);
+    let (t1, t2) = held.any_orthonormal_pair();
+    // ∇ω_o = −(I − ω ωᵀ)/R; c_k = ∇ω_oᵀ t_k (t_k ⊥ ω: −t_k/R).
+    let reach = (e - x).length();
+    let mut cross_edges = [DMat3::ZERO; 3];
+    let mut cross_area = [DMat3::ZERO; 3];
+    for t in [t1, t2] {
+        let (plus, minus) = ((held + t * delta).normalize(), (held - t * delta).normalize());
+        let c = -t / reach;
+        let (ep, em) = (edge_form(plus), edge_form(minus));
+        let ap = area_rule(g, &pieces, x, Outgoing::Direction(plus), sigma_t);
+        let am = area_rule(g, &pieces, x, Outgoing::Direction(minus), sigma_t);
+        for ch in 0..3 {
+            let outer = |a: DVec3| DMat3::from_cols(a * c.x, a * c.y, a * c.z);
+            let ge = (ep[ch].grad - em[ch].grad) / (2.0 * delta);
+            let ga = (ap[ch].grad - am[ch].grad) / (2.0 * delta);
+            cross_edges[ch] += outer(ge) + outer(ge).transpose();
+            cross_area[ch] += outer(ga) + outer(ga).transpose();
+        }
+    }
+    Some(std::array::from_fn(|ch| {
+        let mut t = edges[ch] + (turning[ch] - held_area[ch]);
+        t.hess += cross_edges[ch] - cross_area[ch];
+        t
+    }))
 }
 
 /// ∫ f T dω over `pieces` (one plane) by Radon's rule on each, per channel.
@@ -262,7 +300,6 @@ mod tests {
     use super::*;
     use crate::core::phase::hg_of_mu;
     use crate::core::triangle::triangle_form_factor_clamped;
-    use glam::DMat3;
 
     /// The phase-weighted solid angle by brute force: f at the centroids of a fine
     /// uniform split (n² pieces) times their solid angles.

@@ -24,6 +24,7 @@ use super::probe::LightField;
 use super::proxy::Element;
 use super::silhouette::BRIDGE_RATIO;
 use crate::core::color::Rgb;
+use crate::core::graded_rule::graded_nodes;
 use crate::core::taylor::Taylor2;
 use crate::core::transmittance::transmittance_taylor_rgb;
 
@@ -180,73 +181,6 @@ pub fn mean_over_directions<S: Dim>(lf: &LightField<S>, v: &[S::Vec]) -> [Taylor
     let r = v.iter().map(|&q| S::length(q - x)).fold(f64::INFINITY, f64::min);
     let h = 1e-3 * r.min(1.0 / lf.sigma_t.max_element().max(1e-12));
     Taylor2::central_differences(mean, x, h)
-}
-
-/// Quadrature nodes (barycentric point, weight; the weights sum to 1) over a
-/// triangle element whose vertices lie at distances `r` from x, for
-/// [`mean_over_directions`]: Radon's 7-point rule where the distances differ by
-/// at most 2×, else the rule on each band between the level lines where the
-/// distance halves. The point a direction meets lies at |p| / Σ(b_k / r_k) from
-/// x, whose denominator is linear in the barycentric coordinates: its level
-/// lines are straight. A grazing element below an emitter spans distances from
-/// ≈ 20 d to the emitter's edge (10⁴ times more at d = 1e-5); seven points saw
-/// only its near part and missed the transmittance's share of the gradient,
-/// ∫ T′(r)/r dr over the grazing directions, which grows as ln(1/d) (at σ_s = 1
-/// the gradient grows by 1.5 ln 10 a decade of d below an emitter of radiance 3,
-/// `tests/near_surface_3d.rs`).
-fn graded_nodes(r: [f64; 3]) -> Vec<([f64; 3], f64)> {
-    use crate::core::phase_patch::RADON7;
-    let w = r.map(|r| 1.0 / r);
-    let (lo, hi) = (
-        w.iter().copied().fold(f64::INFINITY, f64::min),
-        w.iter().copied().fold(0.0, f64::max),
-    );
-    if !(lo > 0.0 && hi.is_finite()) || hi <= 2.0 * lo {
-        return RADON7.to_vec();
-    }
-    let level = |b: &[f64; 3]| b[0] * w[0] + b[1] * w[1] + b[2] * w[2];
-    // The part of a convex polygon (barycentric points) where the level is ≥ `at`
-    // (`above`) or ≤ it.
-    let clip = |poly: &[[f64; 3]], at: f64, above: bool| -> Vec<[f64; 3]> {
-        let keep = |b: &[f64; 3]| if above { level(b) >= at } else { level(b) <= at };
-        let mut out = Vec::with_capacity(poly.len() + 1);
-        for k in 0..poly.len() {
-            let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
-            if keep(&p) {
-                out.push(p);
-            }
-            if keep(&p) != keep(&q) {
-                let t = (at - level(&p)) / (level(&q) - level(&p));
-                out.push(std::array::from_fn(|i| p[i] + (q[i] - p[i]) * t));
-            }
-        }
-        out
-    };
-    // Twice the area of a barycentric triangle, as a share of the whole one's.
-    let area = |a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]| {
-        ((b[1] - a[1]) * (c[2] - a[2]) - (b[2] - a[2]) * (c[1] - a[1])).abs()
-    };
-    let whole = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    let mut nodes = Vec::new();
-    // At most 64 bands (distance ratios beyond 2^64 take one more for the rest).
-    let mut from = lo;
-    for band in 0..64 {
-        let to = if band == 63 { hi } else { (2.0 * from).min(hi) };
-        let piece = clip(&clip(&whole, from, true), to, false);
-        for k in 1..piece.len().saturating_sub(1) {
-            let (a, b, c) = (piece[0], piece[k], piece[k + 1]);
-            let share = area(&a, &b, &c);
-            for (z, wt) in RADON7 {
-                let point = std::array::from_fn(|i| a[i] * z[0] + b[i] * z[1] + c[i] * z[2]);
-                nodes.push((point, wt * share));
-            }
-        }
-        if to >= hi {
-            break;
-        }
-        from = to;
-    }
-    nodes
 }
 
 /// Whether the phase's lobe is wide against element `v` seen from x, so that
