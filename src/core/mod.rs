@@ -17,6 +17,7 @@ pub mod phase_arc;
 pub mod phase_patch;
 pub mod rng;
 pub mod roulette;
+pub mod segment_boundary;
 pub mod sobol;
 pub mod space;
 pub mod stats;

@@ -228,6 +228,32 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
     let s = lf.sigma_s;
     let times_sigma_s = |t: [Taylor2<S>; 3]| [t[0] * s.x, t[1] * s.y, t[2] * s.z];
     if e.kind == ElementKind::Surface {
+        // 2D next to a surface, with a phase that turns: f·T integrated over the
+        // segment with its derivatives at the ends (`core::segment_boundary`; the
+        // product of the phase's closed form and the transmittance's mean missed
+        // ∫ f T dθ on grazing segments: 10–12% off from d = 1e-5 to 1e-8).
+        let near =
+            e.v.as_ref()
+                .iter()
+                .map(|&q| S::length(q - lf.x))
+                .fold(f64::INFINITY, f64::min);
+        let close_2d = S::DIM == 2
+            && near > 0.0
+            && near < CLOSE_RATIO * lf.median_length
+            && e.far_plane.is_none()
+            && lf.angular == Angular::Phase
+            && lf.g != 0.0
+            && settings.lobe_integral;
+        if close_2d {
+            let sigma_t = [lf.sigma_t.x, lf.sigma_t.y, lf.sigma_t.z];
+            let res = Resolution {
+                boundary: true,
+                ..Resolution::at(0, near / lf.median_length)
+            };
+            if let Some(ft) = S::lobe_integral(lf.g, e.v, lf.x, lf.outgoing(), sigma_t, res) {
+                return TaylorRgb::tint(Taylor2::constant(1.0), e.radiance).mul_channels(times_sigma_s(ft));
+            }
+        }
         // Where the phase integrates in closed form over the element (2D), it does:
         // a lobe narrower than the element (g → ±1) is then exact.
         if let Some(pw) =

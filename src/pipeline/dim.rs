@@ -15,6 +15,7 @@ use crate::core::phase::{Hg2, Hg3, Outgoing};
 use crate::core::phase_arc::phase_weighted_angle;
 use crate::core::phase_patch::{Resolution, lobe_integral};
 use crate::core::rng::Sampler;
+use crate::core::segment_boundary::segment_lobe_integral;
 use crate::core::space::{D2, D3, Space};
 use crate::core::taylor::Taylor2;
 use crate::core::triangle::{triangle_form_factor, triangle_form_factor_clamped};
@@ -104,9 +105,9 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     /// ∫ f T dω over the simplex's directions (an oriented simplex), per channel of
     /// the extinction, with its derivatives, where the phase's lobe turns within the
     /// simplex (3D: `core::phase_patch`, split pieces as fine as `res` and a
-    /// degree-5 area rule); `None` where one point of the simplex serves, and
-    /// always in 2D (the closed form [`Dim::phase_weighted_form`] integrates the
-    /// phase there).
+    /// degree-5 area rule); `None` where one point of the simplex serves, and in
+    /// 2D (the closed form [`Dim::phase_weighted_form`] integrates the phase
+    /// there) but next to a surface (`res.boundary`: `core::segment_boundary`).
     fn lobe_integral(
         g: f64,
         v: Self::Simplex<Self::Vec>,
@@ -239,14 +240,20 @@ impl Dim for D2 {
     }
 
     fn lobe_integral(
-        _: f64,
-        _: [DVec2; 2],
-        _: DVec2,
-        _: Outgoing<DVec2>,
-        _: [f64; 3],
-        _: Resolution,
+        g: f64,
+        v: [DVec2; 2],
+        x: DVec2,
+        out: Outgoing<DVec2>,
+        sigma_t: [f64; 3],
+        res: Resolution,
     ) -> Option<[Taylor2<D2>; 3]> {
-        None
+        // The phase has a closed form over a segment (`phase_weighted_form`);
+        // next to a surface f·T is integrated with derivatives at the ends.
+        if res.boundary {
+            segment_lobe_integral(g, v, x, out, sigma_t)
+        } else {
+            None
+        }
     }
 }
 

@@ -74,10 +74,21 @@ pub fn single_scattering(scene: &Scene, x: DVec2, omega_o: DVec2) -> Rgb {
             continue;
         }
         let e = s.b - s.a;
+        let distance = |theta: f64| (cross(s.a - x, e) / cross(DVec2::from_angle(theta), e)).abs();
         let panels = ((b - a) / PANEL).ceil().max(1.0) as usize;
         let width = (b - a) / panels as f64;
+        // Panels also halved until the distance changes at most 2× across each:
+        // next to the segment the grazing directions see it from r ≈ d to 10⁶ d,
+        // and uniform panels missed the transmittance's share of the gradient
+        // (at σ_t = 1, g = 0.6, d = 1e-6 below an emitter, ∂_y L came out 2.375
+        // against 2.7719 by an independent 40-digit quadrature).
+        let mut edges = vec![a];
         for k in 0..panels {
-            let lo = a + k as f64 * width;
+            let (lo, hi) = (a + k as f64 * width, a + (k + 1) as f64 * width);
+            halve_to_distance(lo, hi, &distance, 0, &mut edges);
+        }
+        for w in edges.windows(2) {
+            let (lo, width) = (w[0], w[1] - w[0]);
             for &(z, wt) in &gl {
                 let d = DVec2::from_angle(lo + 0.5 * width * (z + 1.0));
                 let t = cross(s.a - x, e) / cross(d, e);
@@ -87,6 +98,20 @@ pub fn single_scattering(scene: &Scene, x: DVec2, omega_o: DVec2) -> Rgb {
         }
     }
     sum * m.sigma_s
+}
+
+/// Pushes the right ends of [lo, hi]'s pieces, halved until the distance `r`
+/// changes at most 2× across each (at most 60 levels).
+fn halve_to_distance(lo: f64, hi: f64, r: &impl Fn(f64) -> f64, depth: u32, out: &mut Vec<f64>) {
+    let (ra, rb) = (r(lo), r(hi));
+    let ratio = ra.max(rb) / ra.min(rb);
+    if depth < 60 && ratio.is_finite() && ratio > 2.0 {
+        let m = 0.5 * (lo + hi);
+        halve_to_distance(lo, m, r, depth + 1, out);
+        halve_to_distance(m, hi, r, depth + 1, out);
+    } else {
+        out.push(hi);
+    }
 }
 
 /// Value, gradient and Hessian of [`single_scattering`] by central differences with
