@@ -1,5 +1,15 @@
 //! Radon's degree-5 rule on a triangle, alone or on bands where the distance from
-//! a point halves (for triangles seen at a grazing angle).
+//! a point halves (for triangles seen at a grazing angle), and Gauss–Legendre's
+//! five points on a segment.
+
+/// Gauss–Legendre on [0, 1], 5 points (exact for degree 9): nodes, weights.
+pub const GAUSS5: [(f64, f64); 5] = [
+    (0.046_910_077_030_668, 0.118_463_442_528_094_5),
+    (0.230_765_344_947_158_5, 0.239_314_335_249_683_2),
+    (0.5, 0.284_444_444_444_444_4),
+    (0.769_234_655_052_841_5, 0.239_314_335_249_683_2),
+    (0.953_089_922_969_332, 0.118_463_442_528_094_5),
+];
 
 /// Radon's 7-point rule on a triangle, exact for polynomials of degree 5:
 /// barycentric points and weights (summing to 1).

@@ -31,21 +31,12 @@
 //! d = 1e-1 to 1e-8: gradient within 0.25%, Hessian within 3% wherever the
 //! reference can tell (g 0, 0.6, 0.99 along ω_o and towards an eye, g −0.9).
 
-use super::graded_rule::graded_nodes;
+use super::graded_rule::{GAUSS5, graded_nodes};
 use super::phase::{Outgoing, phase_taylor_out};
 use super::space::D3;
 use super::taylor::Taylor2;
 use super::transmittance::transmittance_taylor;
 use glam::{DMat3, DVec3};
-
-/// Gauss–Legendre on [0, 1], 5 points (exact for degree 9): nodes, weights.
-const GAUSS5: [(f64, f64); 5] = [
-    (0.046_910_077_030_668_0, 0.118_463_442_528_094_5),
-    (0.230_765_344_947_158_5, 0.239_314_335_249_683_2),
-    (0.5, 0.284_444_444_444_444_4),
-    (0.769_234_655_052_841_5, 0.239_314_335_249_683_2),
-    (0.953_089_922_969_332, 0.118_463_442_528_094_5),
-];
 
 /// An edge's piece is split while its length exceeds this fraction of its
 /// nearest end's distance from x, or its angular length this fraction of its

@@ -16,20 +16,13 @@
 //! by Gauss–Legendre on pieces small against their distance and the lobe. With
 //! ω_o turning with x (light towards a point), central differences in its angle.
 
+use super::graded_rule::GAUSS5;
 use super::phase::{G_MAX, Outgoing, phase_taylor_out};
 use super::space::D2;
 use super::taylor::Taylor2;
 use super::transmittance::transmittance_taylor;
 use glam::{DMat2, DVec2};
 
-/// Gauss–Legendre on [0, 1], 5 points: nodes, weights.
-const GAUSS5: [(f64, f64); 5] = [
-    (0.046_910_077_030_668, 0.118_463_442_528_094_5),
-    (0.230_765_344_947_158_5, 0.239_314_335_249_683_2),
-    (0.5, 0.284_444_444_444_444_4),
-    (0.769_234_655_052_841_5, 0.239_314_335_249_683_2),
-    (0.953_089_922_969_332, 0.118_463_442_528_094_5),
-];
 /// A piece is halved while its length exceeds this fraction of its nearest end's
 /// distance, or its angle this fraction of its angle from the lobe's axis plus the
 /// lobe's width.

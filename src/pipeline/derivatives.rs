@@ -232,11 +232,11 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         // segment with its derivatives at the ends (`core::segment_boundary`; the
         // product of the phase's closed form and the transmittance's mean missed
         // ∫ f T dθ on grazing segments: 10–12% off from d = 1e-5 to 1e-8).
-        let near =
-            e.v.as_ref()
-                .iter()
-                .map(|&q| S::length(q - lf.x))
-                .fold(f64::INFINITY, f64::min);
+        let v = e.v.as_ref();
+        let (near, far) = v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &q| {
+            let r = S::length(q - lf.x);
+            (lo.min(r), hi.max(r))
+        });
         let close_2d = S::DIM == 2
             && near > 0.0
             && near < CLOSE_RATIO * lf.median_length
@@ -246,6 +246,7 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
             && settings.lobe_integral;
         if close_2d {
             let sigma_t = [lf.sigma_t.x, lf.sigma_t.y, lf.sigma_t.z];
+            // (No pieces in 2D: the segment's integral refines itself.)
             let res = Resolution {
                 boundary: true,
                 ..Resolution::at(0, near / lf.median_length)
@@ -259,7 +260,6 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         if let Some(pw) =
             S::phase_weighted_form(lf.g, e.v, lf.x, lf.outgoing()).filter(|_| lf.angular == Angular::Phase)
         {
-            let v = e.v.as_ref();
             let t = match e.far_plane {
                 Some(plane) => slide::vertex_rule(lf, e, plane, soft, false),
                 None if v.len() == 2 && lf.sigma_t.max_element() > 0.0 => slide::transmittance_mean(lf, v[0], v[1]),
@@ -269,11 +269,6 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         }
         // 3D pieces of one surface seen at a grazing angle, or close to x, whose
         // f·T is taken over their directions (below).
-        let v = e.v.as_ref();
-        let (near, far) = v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &q| {
-            let r = S::length(q - lf.x);
-            (lo.min(r), hi.max(r))
-        });
         let grazing = v.len() == 3 && far > (1.0 + GRAZING_RATIO) * near && e.far_plane.is_none();
         // A grazing element within which the lobe turns little takes the mean; one
         // the lobe is narrow against (g → ±1) still needs the lobe's integral. A
