@@ -1,5 +1,7 @@
 //! The aware multiple-scattering gradient in anisotropic fog, in 2D and 3D, against
-//! finite differences of the path tracer, on scenes of their own (issue 12 item 3).
+//! converged finite differences of the path tracer, on scenes of their own (issue 12
+//! item 3: median vector error < 20%, no sign errors, at ≥ 8 points where the
+//! gradient stands well above the reference's noise).
 //!
 //! A probe's medium sample m is seen from x along ω = (m − x)/r; with an anisotropic
 //! phase what m sends towards x turns with ω as x moves. Holding each sample's light
@@ -8,14 +10,32 @@
 //! reference; g = −0.5: 1.10, 0.13–1.1×; 3D fog box, g = 0.3, graded march: 1.1–2.4,
 //! 2–3.4×). The probe now estimates each sample's direction gradient
 //! (`pipeline::path::scattered_with_slope`) and the derivatives carry it
-//! (`pipeline::derivatives::medium_point`). Each case below compares the aware
-//! gradient with and without those slopes against the same reference.
+//! (`pipeline::derivatives::medium_point`). Each case also compares the gradient
+//! without those slopes against the same reference.
 //!
-//! Measured over aware seeds 5–8 (references: 4 × 40k spp in 2D, 8 × 16k in 3D,
-//! their relative standard errors 0.02–0.44): median vector error with slopes
-//! 0.12–0.29 (2D, g = 0.6), 0.15–0.19 (2D, g = −0.5), 0.22–0.29 (3D, g = 0.5);
-//! without 1.73–1.99, 1.29–1.41, 2.81–2.92. Bounds: 0.45, and at most 0.3× the error
-//! without slopes (measured ≤ 0.17×).
+//! The references are the mean of 20 (2D, 40k spp) or 40 (3D, 16k spp) seeds;
+//! points where their relative standard error is 0.1 or more are skipped (2D,
+//! g = −0.5: two of twelve, gradients 0.046 and 0.076), the others' is 0.01–0.07
+//! (2D) and 0.03–0.09 (3D). (With 4 and 8 seeds, as this test had before, it was
+//! 0.02–0.44 and the medians, 0.12–0.39, measured mostly the reference.)
+//! Median vector error over points and aware seeds 5–8 (each seed's own median in
+//! brackets; seeds 9–12 in braces):
+//! - 2D, 4096 directions: g = 0.6 0.106 (0.096–0.117) {0.146 (0.089–0.220)};
+//!   g = −0.5 0.094 (0.093–0.111) {0.085 (0.072–0.116)}. At the 2D default of 1024
+//!   directions (32-seed references) 0.187 (0.147–0.244) and 0.143 (0.111–0.181),
+//!   the difference noise: the mean of 8 seeds is 0.05–0.19 off.
+//! - 3D, 4096 directions, the default even march: 0.154 (0.143–0.164) {0.162
+//!   (0.153–0.169)}. It was 0.39 (lengths 0.34–0.62 of the reference, the same for
+//!   every seed) before the gradient's kernel was smoothed over at most 0.3 of the
+//!   march's first step (`derivatives::GRADIENT_SMOOTHING_CAP`).
+//!
+//! Without slopes the medians are 1.1–1.5. No component of a quarter of the
+//! reference's length or more had its sign wrong. One 3D point stays 0.41–0.53
+//! off: under the box, 0.1 inside its edge, where the aware gradient is 0.64 of
+//! the reference at g = 0.5 and 0.71 at g = 0, unmoved by 4× the directions, 4×
+//! the steps, the clamp or the grading (not diagnosed).
+//! Bounds: the issue's 0.2 on the median over points and seeds, 0.25 on each
+//! seed's, at most 0.3× the error without slopes, at least 8 points checked.
 
 use glam::{DVec2, DVec3};
 use std::path::Path;
@@ -63,37 +83,21 @@ fn volume(g: f64) -> volcache::volume::scene::Scene {
     volcache::volume::scene::Scene::from_json(&json, "<test>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The multiple-scattering luminance gradient: (aware with slopes, aware without,
-/// reference as the mean of `ref_seeds` finite-difference estimates, the
-/// reference's relative standard error).
-fn gradients<W: World>(
+/// The multiple-scattering luminance gradient's reference at x: the mean of `seeds`
+/// finite-difference estimates and its relative standard error.
+fn reference_gradient<W: World>(
     world: &W,
     x: <W::S as Space>::Vec,
-    ps: &ProbeSettings,
     spp: u32,
-    ref_seeds: u64,
-) -> [(<W::S as Space>::Vec, f64); 3] {
+    seeds: u64,
+) -> (<W::S as Space>::Vec, f64) {
     let out = Outgoing::Direction(<W::S as Space>::axis(0));
-    let aware_multiple = |ps: &ProbeSettings| {
-        let lf = capture(world, x, out, ps, 5, 0, &Progress::new()).unwrap();
-        let aw = AwareSettings::default();
-        aware(&lf, &build(&lf, aw.rule), &aw).multiple.luminance()
-    };
-    let (with, without) = (
-        aware_multiple(ps),
-        aware_multiple(&ProbeSettings { slopes: false, ..*ps }),
-    );
-    // The slopes replay NEE on cloned streams: the value's own draws are untouched.
-    assert_eq!(
-        with.value, without.value,
-        "x = {x:?}: the value changed with the slopes"
-    );
     let h = ReferenceSettings::default().relative_step * world.scale();
     let settings = Settings {
         max_depth: 32,
         ..Settings::default()
     };
-    let refs: Vec<_> = (0..ref_seeds)
+    let refs: Vec<_> = (0..seeds)
         .map(|s| {
             reference(world, x, out, h, spp, &settings, 101 + s, false)
                 .parts
@@ -102,15 +106,28 @@ fn gradients<W: World>(
                 .grad
         })
         .collect();
-    let n = ref_seeds as f64;
+    let n = seeds as f64;
     let mean = refs.iter().fold(<W::S as Space>::zero(), |a, &b| a + b) / n;
     let var: f64 = refs
         .iter()
         .map(|&r| <W::S as Space>::length_squared(r - mean))
         .sum::<f64>()
         / (n - 1.0);
-    let se = (var / n).sqrt() / <W::S as Space>::length(mean);
-    [(with.grad, 0.0), (without.grad, 0.0), (mean, se)]
+    (mean, (var / n).sqrt() / <W::S as Space>::length(mean))
+}
+
+/// The aware multiple-scattering luminance gradient of one probe.
+fn aware_gradient<W: World>(
+    world: &W,
+    x: <W::S as Space>::Vec,
+    ps: &ProbeSettings,
+    seed: u64,
+) -> (<W::S as Space>::Vec, f64) {
+    let out = Outgoing::Direction(<W::S as Space>::axis(0));
+    let lf = capture(world, x, out, ps, seed, 0, &Progress::new()).unwrap();
+    let aw = AwareSettings::default();
+    let m = aware(&lf, &build(&lf, aw.rule), &aw).multiple.luminance();
+    (m.grad, m.value)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -118,54 +135,88 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Median relative vector error of the gradient with and without slopes over `points`.
-fn errors<W: World>(
+const AWARE_SEEDS: std::ops::Range<u64> = 5..9;
+
+/// Points where the reference's relative standard error is this or more are not
+/// checked: the gradient there is not well above the reference's noise.
+const MAX_REFERENCE_NOISE: f64 = 0.1;
+
+/// Checks the aware gradient with slopes against the reference at `points` (see
+/// the module's note for the bounds).
+fn check<W: World>(
     world: &W,
     points: &[<W::S as Space>::Vec],
     ps: &ProbeSettings,
     spp: u32,
     ref_seeds: u64,
     what: &str,
-) -> (f64, f64) {
-    let (mut with, mut without) = (vec![], vec![]);
+) {
+    let d = <W::S as Space>::DIM;
+    let seeds = AWARE_SEEDS.count();
+    let (mut per_seed, mut all_with, mut all_without) = (vec![vec![]; seeds], vec![], vec![]);
+    let (mut sign_errors, mut checked) = (vec![], 0);
     for &x in points {
-        let [(a, _), (b, _), (r, se)] = gradients(world, x, ps, spp, ref_seeds);
+        let (r, se) = reference_gradient(world, x, spp, ref_seeds);
+        if se >= MAX_REFERENCE_NOISE {
+            eprintln!("{what} x = {x:?}: skipped, the reference's relative standard error is {se:.3}");
+            continue;
+        }
+        checked += 1;
         let rel = |g| <W::S as Space>::length(g - r) / <W::S as Space>::length(r);
-        let len = |g| <W::S as Space>::length(g) / <W::S as Space>::length(r);
-        eprintln!(
-            "{what} x = {x:?}: reference {r:.4?} (rel. s.e. {se:.3}) | slopes: error {:.3}, length {:.2} | without: error {:.3}, length {:.2}",
-            rel(a),
-            len(a),
-            rel(b),
-            len(b)
-        );
-        with.push(rel(a));
-        without.push(rel(b));
+        let mut line = format!("{what} x = {x:?}: reference {r:.4?} (rel. s.e. {se:.3}) | with slopes");
+        for (k, seed) in AWARE_SEEDS.enumerate() {
+            let (with, value) = aware_gradient(world, x, ps, seed);
+            let (without, value_without) = aware_gradient(world, x, &ProbeSettings { slopes: false, ..*ps }, seed);
+            // The slopes replay NEE on cloned streams: the value's own draws are untouched.
+            assert_eq!(
+                value, value_without,
+                "{what} x = {x:?}: the value changed with the slopes"
+            );
+            for i in 0..d {
+                let e = <W::S as Space>::axis(i);
+                let (ri, gi) = (<W::S as Space>::dot(r, e), <W::S as Space>::dot(with, e));
+                if ri.abs() >= 0.25 * <W::S as Space>::length(r) && ri * gi <= 0.0 {
+                    sign_errors.push(format!("x = {x:?} seed {seed} component {i}: {gi} against {ri}"));
+                }
+            }
+            line += &format!(" {:.3}", rel(with));
+            per_seed[k].push(rel(with));
+            all_with.push(rel(with));
+            all_without.push(rel(without));
+        }
+        eprintln!("{line}");
     }
-    let (m_with, m_without) = (median(with), median(without));
-    eprintln!("{what}: median error with slopes {m_with:.3}, without {m_without:.3}");
-    (m_with, m_without)
+    let seed_medians: Vec<f64> = per_seed.into_iter().map(median).collect();
+    let (with, without) = (median(all_with), median(all_without));
+    eprintln!("{what}: median error {with:.3} (per seed {seed_medians:.3?}), without slopes {without:.3}");
+    assert!(checked >= 8, "{what}: only {checked} points with a converged reference");
+    assert!(sign_errors.is_empty(), "{what}: sign errors {sign_errors:?}");
+    assert!(with < 0.2, "{what}: median gradient error {with}");
+    for m in seed_medians {
+        assert!(m < 0.25, "{what}: one seed's median gradient error {m}");
+    }
+    assert!(with < 0.3 * without, "{what}: {with} with slopes, {without} without");
 }
 
-const POINTS_2D: [[f64; 2]; 6] = [
+const POINTS_2D: [[f64; 2]; 12] = [
     [-0.5, 0.0],
     [0.0, 0.1],
     [0.2, -0.3],
     [-0.5, 0.5],
     [0.4, 0.4],
     [-0.1, -0.5],
+    [-0.6, -0.5],
+    [0.6, -0.6],
+    [0.0, 0.6],
+    [-0.65, 0.2],
+    [-0.3, -0.3],
+    [0.5, 0.1],
 ];
 
 fn check_2d(g: f64) {
-    let s = flatland(g);
     let points: Vec<DVec2> = POINTS_2D.iter().map(|p| DVec2::from(*p)).collect();
-    let ps = ProbeSettings::with_rays::<D2>(1024);
-    let (with, without) = errors(&s, &points, &ps, 40_000, 4, &format!("2D g = {g}"));
-    assert!(with < 0.45, "2D g = {g}: median gradient error {with}");
-    assert!(
-        with < 0.3 * without,
-        "2D g = {g}: {with} with slopes, {without} without"
-    );
+    let ps = ProbeSettings::with_rays::<D2>(4096);
+    check(&flatland(g), &points, &ps, 40_000, 20, &format!("2D g = {g}"));
 }
 
 #[test]
@@ -180,17 +231,24 @@ fn multiple_scattering_gradient_in_backward_scattering_fog_2d() {
 
 #[test]
 fn multiple_scattering_gradient_in_anisotropic_fog_3d() {
-    let s = volume(0.5);
-    let points: Vec<DVec3> = [[0.3, 0.8, 0.2], [-0.5, 1.4, 0.4], [0.5, 0.4, -0.3], [-0.3, 0.4, 0.6]]
-        .iter()
-        .map(|p| DVec3::from(*p))
-        .collect();
-    // A graded march, where the missing term was largest (the 3D default is even).
-    let ps = ProbeSettings {
-        grading: 6.0,
-        ..ProbeSettings::with_rays::<D3>(<D3 as Dim>::PROBE_RAYS)
-    };
-    let (with, without) = errors(&s, &points, &ps, 16_384, 8, "3D g = 0.5");
-    assert!(with < 0.45, "3D: median gradient error {with}");
-    assert!(with < 0.3 * without, "3D: {with} with slopes, {without} without");
+    let points: Vec<DVec3> = [
+        [0.3, 0.8, 0.2],
+        [-0.5, 1.4, 0.4],
+        [-0.6, 1.5, 0.0],
+        [0.0, 1.6, 0.0],
+        [-1.0, 1.2, 0.2],
+        [-0.45, 1.0, 0.0],
+        [-0.6, 0.3, 0.0],
+        [0.2, 1.2, -0.5],
+        [-1.2, 0.5, 0.5],
+        [0.6, 1.0, 0.6],
+        [-0.2, 1.3, 0.6],
+        [-0.8, 0.8, -0.8],
+    ]
+    .iter()
+    .map(|p| DVec3::from(*p))
+    .collect();
+    // The 3D defaults: 4096 directions, an even march.
+    let ps = ProbeSettings::with_rays::<D3>(<D3 as Dim>::PROBE_RAYS);
+    check(&volume(0.5), &points, &ps, 16_384, 40, "3D g = 0.5");
 }

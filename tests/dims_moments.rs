@@ -82,12 +82,17 @@ fn moments_give_the_record<F: Fixture>() {
             // record exactly (measured ≤ 4.6e-4, 3 seeds × 4 points). Ours softens
             // the phase near x (derivatives::near_field_phase), shortening the
             // direction, where the basis polynomials and the phase's closed form
-            // part: measured gradient ≤ 0.14 (2D) / 0.031 (3D), Hessian ≤ 0.053 /
-            // 0.018 of max(|∇L|, L) and max(‖H‖, L).
+            // part: measured gradient ≤ 0.14 (2D) / 0.093 (3D), Hessian ≤ 0.053 /
+            // 0.024 of max(|∇L|, L) and max(‖H‖, L). The softening follows the
+            // gradient's smoothing length, which in 3D (an even march) was the whole
+            // first step, 3.3× today's cap (`derivatives::GRADIENT_SMOOTHING_CAP`):
+            // then the 3D gradient differed by ≤ 0.031, at 0.39 from finite
+            // differences of path tracing where it is now 0.15
+            // (tests/anisotropic_multiple_scattering.rs).
             let (grad, hess) = match (method, F::DIM) {
                 (CacheMethod::Jarosz08, _) => (5e-3, f64::INFINITY),
                 (CacheMethod::Ours, 2) => (0.25, 0.1),
-                (CacheMethod::Ours, _) => (0.06, 0.04),
+                (CacheMethod::Ours, _) => (0.15, 0.04),
             };
             assert!(worst[1][1] < grad, "{what}: gradient {:e}", worst[1][1]);
             assert!(worst[1][2] < hess, "{what}: Hessian {:e}", worst[1][2]);

@@ -272,7 +272,11 @@ impl Dim for D3 {
     /// at k = 0 and 0.78–1.07 at k = 6, median vector error 0.22 and 0.12 against
     /// 8 finite-difference references (their own relative standard error
     /// 0.07–0.13), 4 points × 2 seeds: k = 6 is now the more accurate record at
-    /// 2.2× the cost; the equal-time comparison was not repeated.)
+    /// 2.2× the cost; the equal-time comparison was not repeated. Against converged
+    /// references — 12 points, 48 × 16k spp, seeds 5–8 — k = 0 was 0.39 off, its
+    /// kernel smoothed over the whole first step; with the gradient's smoothing capped
+    /// at 0.3 of the step (`derivatives::GRADIENT_SMOOTHING_CAP`) it is 0.15, against
+    /// 0.11 at k = 6 for 1.7× the probe's time.)
     const PROBE_GRADING: f64 = 0.0;
     type Phase = Hg3;
     type Simplex<T: Element> = [T; 3];

@@ -160,7 +160,7 @@ fn sample_moments<S: Dim>(
     let t = transmittance_taylor_rgb::<S>(lf.sigma_t, x, p, soft);
     let exact = bases::<S>(bands, x, p, soft);
     let local = lf.march.thickness_at(r);
-    let (fine, even) = (lf.march.thickness_at(0.0), lf.march.even_step());
+    let (fine, even) = super::derivatives::smoothing_scales(&lf.march);
     // A kernel's form factor (over Δt) and its near-field angular factors per k.
     let kernel = |scale: f64| -> (Taylor2<S>, Vec<Taylor2<S>>) {
         let smoothing = medium_clamp * scale;
