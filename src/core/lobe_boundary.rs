@@ -36,6 +36,7 @@ use super::phase::{Outgoing, phase_taylor_out};
 use super::space::D3;
 use super::taylor::Taylor2;
 use super::transmittance::transmittance_taylor;
+use super::triangle::signed_solid_angle;
 use glam::{DMat3, DVec3};
 
 /// An edge's piece is split while its length exceeds this fraction of its
@@ -139,15 +140,6 @@ fn edge_integral(lobe: &Lobe, n: DVec3, nu: DVec3, a: DVec3, b: DVec3, x: DVec3)
     sum
 }
 
-/// The solid angle of triangle `v` seen from `x` (Van Oosterom and Strackee).
-fn solid_angle(v: [DVec3; 3], x: DVec3) -> f64 {
-    let [a, b, c] = v.map(|p| p - x);
-    let (la, lb, lc) = (a.length(), b.length(), c.length());
-    let det = a.dot(b.cross(c)).abs();
-    let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    2.0 * det.atan2(den)
-}
-
 /// ∫F dA, ∫F ρ dA and ∫F ρ² dA over `pieces` (one plane of unit normal `n`
 /// facing away from x) per channel: each piece's solid angle times the mean of
 /// f T ρᵏ over its directions, by Radon's rule on bands where the distance halves
@@ -177,7 +169,7 @@ fn moments(lobe: &Lobe, pieces: &[[DVec3; 3]], n: DVec3, x: DVec3) -> [[f64; 3];
             }
             norm += j;
         }
-        let omega = solid_angle(t, x);
+        let omega = signed_solid_angle(t, x).abs();
         for (s, m) in sum.iter_mut().zip(mean) {
             for k in 0..3 {
                 s[k] += omega * m[k] / norm;

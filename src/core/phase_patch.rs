@@ -118,7 +118,13 @@ fn lobe_axis(g: f64, x: DVec3, out: Outgoing<DVec3>) -> Option<DVec3> {
         Outgoing::TowardsPoint(e) => e - x,
     }
     .try_normalize()?;
-    Some(if g > 0.0 { -w } else { w })
+    Some(axis_along(g, w))
+}
+
+/// The lobe's axis for light leaving along the unit vector w: the direction
+/// towards which f peaks (−w forward, w backward).
+fn axis_along(g: f64, w: DVec3) -> DVec3 {
+    if g > 0.0 { -w } else { w }
 }
 
 /// The triangle's angular radius about its centroid's direction and the angular
@@ -213,18 +219,14 @@ pub fn lobe_integral(
         Outgoing::TowardsPoint(e) => e - x,
     }
     .try_normalize()?;
-    let lobe = Lobe {
-        g,
-        out: held,
-        axis: lobe_axis(g, x, out)?,
-        width: 1.0 - g.abs(),
-        sigma_t,
-    };
+    // The edge form with light leaving along w (the held ω_o, or ω_o turned).
     let edge_form = |w: DVec3| {
         let lobe = Lobe {
+            g,
             out: w,
-            axis: if g > 0.0 { -w } else { w },
-            ..lobe
+            axis: axis_along(g, w),
+            width: 1.0 - g.abs(),
+            sigma_t,
         };
         with_edge_derivatives(&lobe, v, &pieces, n * sign, x).map(|t| t * sign)
     };

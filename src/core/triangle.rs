@@ -91,18 +91,24 @@ pub fn triangle_form_factor(v: [DVec3; 3], x: DVec3) -> Taylor2<D3> {
     triangle_form_factor_clamped(v, x, near_distance(size))
 }
 
-/// [`triangle_form_factor`] with an explicit clamping distance `r_min` for the edge
-/// terms of the derivatives (the value is exact). Triangles that share an edge must
-/// clamp it alike for their derivatives to cancel along it (a proxy's chain of
-/// surface elements), so callers that sum a mesh pass one `r_min` for all.
-pub fn triangle_form_factor_clamped(v: [DVec3; 3], x: DVec3, r_min: f64) -> Taylor2<D3> {
+/// The solid angle of the triangle `v` seen from x (Van Oosterom and Strackee),
+/// positive where (v1 − v0) × (v2 − v0) faces away from x.
+pub fn signed_solid_angle(v: [DVec3; 3], x: DVec3) -> f64 {
     let (a, b, c) = (v[0] - x, v[1] - x, v[2] - x);
     let (la, lb, lc) = (a.length(), b.length(), c.length());
     // a·(b × c) = a·((v1 − v0) × (v2 − v0)): edge vectors do not depend on x and do
     // not cancel for small, distant triangles.
     let num = a.dot((v[1] - v[0]).cross(v[2] - v[0]));
     let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    let value = 2.0 * num.atan2(den);
+    2.0 * num.atan2(den)
+}
+
+/// [`triangle_form_factor`] with an explicit clamping distance `r_min` for the edge
+/// terms of the derivatives (the value is exact). Triangles that share an edge must
+/// clamp it alike for their derivatives to cancel along it (a proxy's chain of
+/// surface elements), so callers that sum a mesh pass one `r_min` for all.
+pub fn triangle_form_factor_clamped(v: [DVec3; 3], x: DVec3, r_min: f64) -> Taylor2<D3> {
+    let value = signed_solid_angle(v, x);
     let r_min = r_min.max(MIN_DISTANCE);
     let mut grad = DVec3::ZERO;
     let mut jac = DMat3::ZERO;
