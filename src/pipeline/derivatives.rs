@@ -322,22 +322,6 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         return c.mul_channels(times_sigma_s([Taylor2::constant(1.0); 3]));
     }
     let phase = lf.angular_towards(lf.x, e.anchor, soft);
-    if let Some(revealed) = e.revealed {
-        // A bridging shell piece: its derivatives (what its edges reveal or hide)
-        // carry the light next to the edge, its value the samples' weight. With the
-        // weight in both, the gradient under a box's edge was 0.59 of the reference.
-        let value = element_incident(lf, e).mul_channels(times_sigma_s([phase; 3]));
-        let rev = Element {
-            radiance: revealed,
-            revealed: None,
-            ..*e
-        };
-        let mut c = element_contribution(lf, &rev, settings);
-        for (ch, v) in c.channels.iter_mut().zip(value.channels) {
-            ch.value = v.value;
-        }
-        return c;
-    }
     let mut c = element_incident(lf, e).mul_channels(times_sigma_s([phase; 3]));
     if e.kind == ElementKind::Medium {
         // A bridging shell piece beyond the near field: its samples' light turns
@@ -629,7 +613,6 @@ pub fn aware_with_noise<S: Dim>(
                 if let Some(f) = floor {
                     let floored = Element {
                         radiance: e.radiance + f,
-                        revealed: e.revealed.map(|r| r + f),
                         ..*e
                     };
                     sums.add(e.kind, true, element_contribution(lf, &floored, settings));
