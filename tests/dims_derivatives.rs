@@ -10,7 +10,7 @@ use volcache::core::space::{D2, D3};
 use volcache::core::taylor::Taylor2;
 use volcache::pipeline::derivatives::{AwareSettings, aware, element_contribution, unaware};
 use volcache::pipeline::probe::{LightField, Outgoing, ProbeSettings, capture};
-use volcache::pipeline::proxy::{ElementKind, RadianceRule, build, elements};
+use volcache::pipeline::proxy::{Element, ElementKind, RadianceRule, build, elements};
 use volcache::progress::Progress;
 
 const SIGMA_S: f64 = 1e-6;
@@ -19,6 +19,15 @@ const L_E: f64 = 3.0;
 const VALUE_BOUND: f64 = 1e-4;
 const GRAD_BOUND: f64 = 1e-4;
 const HESS_BOUND: f64 = 1e-3;
+
+/// The probes of [`Fixture::fog_scene`] in the proxy's checks: 1024 rays, 8 steps.
+fn fog_probe_settings<F: Fixture>() -> ProbeSettings {
+    ProbeSettings {
+        rays: 1024,
+        steps: 8,
+        ..ProbeSettings::default_for::<F>()
+    }
+}
 
 fn probe<F: Fixture>(world: &F::W, x: F::Vec, ps: &ProbeSettings, seed: u64) -> LightField<F> {
     capture(world, x, Outgoing::Direction(F::axis(0)), ps, seed, 0, &Progress::new()).expect("not cancelled")
@@ -158,6 +167,63 @@ fn proxy_closes_and_capture_does_not_depend_on_threads_3d() {
     proxy_closes_and_capture_does_not_depend_on_threads::<D3>();
 }
 
+/// A bridging shell piece carries its samples' sum over the vertex count in the
+/// value (each sample's weight in the plain estimate: their mean overweighted the
+/// multiple-scattering value by 17% on fog_box.json) and the Hessian, and the
+/// light next to the occluder's edge in its gradient (`proxy::Element::revealed`,
+/// measured in `tests/anisotropic_multiple_scattering.rs`). So every bridging
+/// shell piece has a revealed light, finite and non-negative, no other element
+/// has one, and a piece's value and Hessian are the same, bit for bit, with it or
+/// without it, while some pieces' gradients differ.
+fn bridging_shell_pieces_keep_their_weight_but_in_the_gradient<F: Fixture>() {
+    let (s, x) = F::fog_scene();
+    let ps = fog_probe_settings::<F>();
+    let settings = AwareSettings::default();
+    for seed in 4..6 {
+        let lf = probe::<F>(&s, x, &ps, seed);
+        let (mut pieces, mut moved) = (0, 0);
+        for e in elements(&lf, RadianceRule::Farther) {
+            let bridging_shell = e.kind == ElementKind::Medium && e.bridging;
+            assert_eq!(e.revealed.is_some(), bridging_shell, "{}D seed {seed}: {e:?}", F::DIM);
+            let Some(revealed) = e.revealed else { continue };
+            assert!(
+                revealed.is_finite() && revealed.min_element() >= 0.0,
+                "{}D seed {seed}: revealed light {revealed:?}",
+                F::DIM
+            );
+            let with = element_contribution(&lf, &e, &settings).luminance();
+            let without = element_contribution(&lf, &Element { revealed: None, ..e }, &settings).luminance();
+            assert_eq!(
+                (with.value, with.hess),
+                (without.value, without.hess),
+                "{}D seed {seed}: {e:?}",
+                F::DIM
+            );
+            pieces += 1;
+            moved += usize::from(with.grad != without.grad);
+        }
+        println!(
+            "{}D seed {seed}: {pieces} bridging shell pieces, {moved} with another gradient",
+            F::DIM
+        );
+        assert!(
+            moved > 0,
+            "{}D seed {seed}: no bridging shell piece's gradient follows its revealed light",
+            F::DIM
+        );
+    }
+}
+
+#[test]
+fn bridging_shell_pieces_keep_their_weight_but_in_the_gradient_2d() {
+    bridging_shell_pieces_keep_their_weight_but_in_the_gradient::<D2>();
+}
+
+#[test]
+fn bridging_shell_pieces_keep_their_weight_but_in_the_gradient_3d() {
+    bridging_shell_pieces_keep_their_weight_but_in_the_gradient::<D3>();
+}
+
 /// The aware sum evaluates each medium sample once, with the shares of measure of
 /// the shell pieces around it (`derivatives::aware_with_floor`); summing every
 /// piece over its own vertices (`derivatives::element_contribution`) is the same
@@ -170,11 +236,7 @@ fn proxy_closes_and_capture_does_not_depend_on_threads_3d() {
 /// 1e-4, 1e-4, 1e-3.
 fn medium_samples_summed_once_agree_with_the_pieces<F: Fixture>() {
     let (s, x) = F::fog_scene();
-    let ps = ProbeSettings {
-        rays: 1024,
-        steps: 8,
-        ..ProbeSettings::default_for::<F>()
-    };
+    let ps = fog_probe_settings::<F>();
     let settings = AwareSettings::default();
     for seed in 4..8 {
         let lf = probe::<F>(&s, x, &ps, seed);

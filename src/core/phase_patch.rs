@@ -113,12 +113,16 @@ fn angle(a: DVec3, b: DVec3) -> f64 {
 /// The direction of the phase lobe's axis seen from `x`: ω = −ω_o for g > 0 (light
 /// arriving from behind, scattered forward), ω_o for g < 0.
 fn lobe_axis(g: f64, x: DVec3, out: Outgoing<DVec3>) -> Option<DVec3> {
-    let w = match out {
+    Some(axis_along(g, leaving(x, out)?))
+}
+
+/// The unit direction light leaves `x` along (ω_o, held fixed in x).
+fn leaving(x: DVec3, out: Outgoing<DVec3>) -> Option<DVec3> {
+    match out {
         Outgoing::Direction(w) => w,
         Outgoing::TowardsPoint(e) => e - x,
     }
-    .try_normalize()?;
-    Some(axis_along(g, w))
+    .try_normalize()
 }
 
 /// The lobe's axis for light leaving along the unit vector w: the direction
@@ -214,11 +218,7 @@ pub fn lobe_integral(
         return Some(area_rule(g, &pieces, x, out, sigma_t));
     }
     let g = g.clamp(-G_MAX, G_MAX);
-    let held = match out {
-        Outgoing::Direction(w) => w,
-        Outgoing::TowardsPoint(e) => e - x,
-    }
-    .try_normalize()?;
+    let held = leaving(x, out)?;
     // The edge form with light leaving along w (the held ω_o, or ω_o turned).
     let edge_form = |w: DVec3| {
         let lobe = Lobe {
