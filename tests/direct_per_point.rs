@@ -13,6 +13,7 @@ use volcache::flatland::field::{Field, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
 use volcache::pipeline::lobe::Lobe;
 use volcache::pipeline::path::direct_at;
+use volcache::pipeline::placement::CountError;
 use volcache::pipeline::probe::Outgoing;
 use volcache::pipeline::record::compute_record;
 use volcache::pipeline::world::{VecOf, World};
@@ -214,7 +215,12 @@ fn records_leave_out_what_the_march_points_add_3d() {
 /// about 0.7× on average (0.61 measured with 3D silhouette cuts). The count was 30
 /// until the 3D proxy cut its simplices at silhouettes: record seed 4 then placed
 /// 32 records or fewer than 28.5 at any ε (the count is not monotone in ε), and
-/// the search rightly reported that it missed.
+/// the search rightly reported that it missed. Such a seed is not compared (an
+/// equal-count comparison has no count to compare at), and at least ten of the
+/// twelve must be: since a bridging shell piece's gradient carries the light next
+/// to the occluder's edge, record seed 10 places no count within 5% of 32 (the
+/// nearest is 35); moving the count instead (33: seed 10 again; 34: seed 6's
+/// cached image lucky, ratio 0.98) is not a fix.
 #[test]
 fn per_point_straight_light_in_3d_images() {
     use volcache::volume::cached::{CachedRenderParams, march_reference, render_cached};
@@ -236,24 +242,37 @@ fn per_point_straight_light_in_3d_images() {
         let error = |ds| {
             let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, p.image.settings);
             (cs.probe.rays, cs.probe.steps, cs.seed, cs.direct_samples) = (512, 8, seed, ds);
-            let r = render_cached(&s, &p, &cs, Some(32), &mut RecordMemo3::new(), &Progress::new())
-                .unwrap_or_else(|e| panic!("{e}"));
-            let e2 = rms(&lum(&r.reconstruction.image.medium), &reference).powi(2);
-            ((e2 - noise2).max(0.0).sqrt(), r.placement.record_count())
+            match render_cached(&s, &p, &cs, Some(32), &mut RecordMemo3::new(), &Progress::new()) {
+                Ok(r) => {
+                    let e2 = rms(&lum(&r.reconstruction.image.medium), &reference).powi(2);
+                    Ok(((e2 - noise2).max(0.0).sqrt(), r.placement.record_count()))
+                }
+                Err(e @ CountError::Unreachable { .. }) => Err(e),
+                Err(e) => panic!("{e}"),
+            }
         };
-        let ((cached, kc), (sampled, ks)) = (error(None), error(Some(8)));
+        let ((cached, kc), (sampled, ks)) = match (error(None), error(Some(8))) {
+            (Ok(c), Ok(p)) => (c, p),
+            (Err(e), _) | (_, Err(e)) => {
+                println!("seed {seed}: not compared, {e}");
+                continue;
+            }
+        };
         println!(
             "seed {seed}: cached {kc} records {cached:.4e}, per point {ks} records {sampled:.4e} (reference noise {:.2e})",
             noise2.sqrt()
         );
         ratios.push(sampled / cached);
     }
-    // Measured (seeds 1-12): 0.71, 0.83, 0.69, 0.94, 0.68, 0.56, 0.66, 0.67, 0.62,
+    // Measured since the revealed light (seeds 1-9, 11, 12; 10 not compared): 0.41,
+    // 0.60, 0.45, 0.35, 0.41, 0.69, 0.30, 0.47, 0.52, 0.33, 0.72 (mean 0.48).
+    // Before it (seeds 1-12): 0.71, 0.83, 0.69, 0.94, 0.68, 0.56, 0.66, 0.67, 0.62,
     // 0.70, 0.46, 0.87 (mean 0.70); with 30 records the cached image's error swings
     // with the records' luck (the same seeds before the emitter sample's draws
     // changed order gave 0.68, 0.45, 0.77, 0.44, 0.37, 0.62), so twelve seeds, not
     // four. The per-point estimate's own noise (8 samples per point, 2 camera
     // samples) is part of it.
+    assert!(ratios.len() >= 10, "only {} seeds at 32 records", ratios.len());
     let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
     assert!(mean < 0.75 && ratios.iter().all(|&r| r < 0.95), "{ratios:?}");
 }
