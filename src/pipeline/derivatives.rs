@@ -145,24 +145,19 @@ pub fn direct_derivatives<S: Dim>(lf: &LightField<S>) -> TaylorRgb<S> {
     sum
 }
 
-/// The light a surface element or a bridging medium element outside the near field
-/// sends to x, T L F (no phase, no σ_s), with derivatives. (Other medium elements:
-/// [`medium_shell_contribution`].)
+/// The light a surface element sends to x, T L F (no phase, no σ_s), with
+/// derivatives. (Medium elements: [`medium_shell_contribution`], and bridging
+/// shell pieces beyond the near field the end of [`element_contribution`].)
 pub fn element_incident<S: Dim>(lf: &LightField<S>, e: &Element<S>) -> TaylorRgb<S> {
+    debug_assert_eq!(e.kind, ElementKind::Surface);
     let soft = near_distance(e.size());
-    let form = match e.kind {
-        // Surfaces: the angle (solid angle), unclamped. Every vertex is a ray's end
-        // or a silhouette, never nearer than the nearest surface, and the elements'
-        // vertex terms cancel in pairs along a chain only if each vertex is treated
-        // alike in both; a clamp scaled by each element's size broke that next to
-        // surfaces (a long silhouette element clamped a near vertex its short
-        // neighbour did not: gradient 26× off at 1e-5 from an emitter).
-        ElementKind::Surface => surface_form_factor(lf, e),
-        // Shell pieces bridging an occluder's edge, beyond medium_clamp·Δt of x:
-        // the angle (solid angle), times the thickness Δt carried in a medium
-        // piece's radiance.
-        ElementKind::Medium => S::form_factor(e.v, lf.x),
-    };
+    // The angle (solid angle), unclamped. Every vertex is a ray's end or a
+    // silhouette, never nearer than the nearest surface, and the elements' vertex
+    // terms cancel in pairs along a chain only if each vertex is treated alike in
+    // both; a clamp scaled by each element's size broke that next to surfaces (a
+    // long silhouette element clamped a near vertex its short neighbour did not:
+    // gradient 26× off at 1e-5 from an emitter).
+    let form = surface_form_factor(lf, e);
     TaylorRgb::tint(form, e.radiance).mul_channels(transmittance_taylor_rgb::<S>(lf.sigma_t, lf.x, e.anchor, soft))
 }
 
@@ -322,46 +317,43 @@ pub fn element_contribution<S: Dim>(lf: &LightField<S>, e: &Element<S>, settings
         return c.mul_channels(times_sigma_s([Taylor2::constant(1.0); 3]));
     }
     let phase = lf.angular_towards(lf.x, e.anchor, soft);
-    if let Some(revealed) = e.revealed {
-        // A bridging shell piece: its gradient (what its edges reveal or hide as x
-        // moves) carries the light next to the edge; its value and Hessian the
-        // samples' weight. With the weight, the gradient under a box's edge was 0.59
-        // of the converged reference. (The gradients of T and f follow the revealed
-        // light too; beside the form factor's, which moves with the edge, they are
-        // small.) The Hessian with the revealed light was not adopted: nothing
-        // checks the multiple part's Hessian against a reference, and the caches it
-        // shapes got worse — relMSE 0.047 → 0.062 and 0.069 → 0.109 in
-        // tests/gradient_noise.rs, 3D fog_box.json's medium RMSE up to 1.11×. With
-        // the gradient alone: 2D shipped scenes within ±1.5% (one run of
-        // shaded_lamp.json 1.46×, its reference as noisy as the error), 3D
-        // fog_box.json and lamp_fog.json 1.01–1.04× (issue 16's extrapolation).
-        let value = element_incident(lf, e).mul_channels(times_sigma_s([phase; 3]));
-        let rev = Element {
-            radiance: revealed,
-            revealed: None,
-            ..*e
-        };
-        let mut c = element_contribution(lf, &rev, settings);
-        for (ch, v) in c.channels.iter_mut().zip(value.channels) {
-            (ch.value, ch.hess) = (v.value, v.hess);
-        }
-        return c;
+    if e.kind == ElementKind::Surface {
+        return element_incident(lf, e).mul_channels(times_sigma_s([phase; 3]));
     }
-    let mut c = element_incident(lf, e).mul_channels(times_sigma_s([phase; 3]));
-    if e.kind == ElementKind::Medium {
-        // A bridging shell piece beyond the near field: its samples' light turns
-        // with the direction x sees them from, as in `medium_point`.
-        let slope = bridging_slope(lf, e);
-        for ((ch, g), l) in c
-            .channels
-            .iter_mut()
-            .zip(slope)
-            .zip([e.radiance.x, e.radiance.y, e.radiance.z])
-        {
-            if l != 0.0 {
-                ch.grad += turning::<S>(lf.x, e.anchor, g, ch.value / l);
-            }
-        }
+    // A bridging shell piece beyond the near field: its kernel σ_s f T F once (F
+    // the angle or solid angle; the thickness Δt is in the piece's radiance), the
+    // light it carries twice. Its value and Hessian carry its samples' weight
+    // (`radiance`); its gradient (what its edges reveal or hide as x moves) the
+    // light next to the edge (`revealed`, when the proxy found one). With the
+    // weight, the gradient under a box's edge was 0.59 of the converged
+    // reference. (The gradients of T and f follow the revealed light too; beside
+    // the form factor's, which moves with the edge, they are small.) The Hessian
+    // with the revealed light was not adopted: nothing checks the multiple part's
+    // Hessian against a reference, and the caches it shapes got worse — relMSE
+    // 0.047 → 0.062 and 0.069 → 0.109 in tests/gradient_noise.rs, 3D
+    // fog_box.json's medium RMSE up to 1.11×. With the gradient alone: 2D shipped
+    // scenes within ±1.5% (one run of shaded_lamp.json 1.46×, its reference as
+    // noisy as the error), 3D fog_box.json and lamp_fog.json 1.01–1.04× (issue
+    // 16's extrapolation).
+    let kernel = TaylorRgb::tint(S::form_factor(e.v, lf.x), Rgb::ONE)
+        .mul_channels(transmittance_taylor_rgb::<S>(lf.sigma_t, lf.x, e.anchor, soft))
+        .mul_channels(times_sigma_s([phase; 3]));
+    let weight = [e.radiance.x, e.radiance.y, e.radiance.z];
+    let shown = e.revealed.unwrap_or(e.radiance);
+    let shown = [shown.x, shown.y, shown.z];
+    // Its samples' light turns with the direction x sees them from, as in
+    // `medium_point`: K·∇_ωL·∇_x ω, whatever light the gradient carries.
+    let slope = bridging_slope(lf, e);
+    let mut c = kernel;
+    for (((ch, k), (w, l)), g) in c
+        .channels
+        .iter_mut()
+        .zip(kernel.channels)
+        .zip(weight.into_iter().zip(shown))
+        .zip(slope)
+    {
+        *ch = k * w;
+        ch.grad = k.grad * l + turning::<S>(lf.x, e.anchor, g, k.value);
     }
     c
 }
