@@ -196,7 +196,7 @@ fn flatland(b: FlatlandBench) -> anyhow::Result<ExitCode> {
     }
 
     let mut bvh_crossover = Vec::new();
-    for n in [4usize, 8, 16, 24, 32, 64, 128] {
+    for n in [2usize, 3, 4, 6, 8, 16, 24, 32, 64, 128] {
         let set = |accel| {
             let mut s = Sampler::new(9, n as u64);
             let segs = (0..n)

@@ -36,10 +36,6 @@ pub trait Primitive<S: Dim>: Send + Sync {
     }
 }
 
-/// Below this many primitives the flat list is faster than the tree
-/// (`volcache bench flatland` measures the crossover on random segment soups).
-pub const BVH_THRESHOLD: usize = 6;
-
 /// How ray queries are answered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Accel {
@@ -62,9 +58,9 @@ pub struct Geometry<S: Dim, P: Primitive<S>> {
 }
 
 impl<S: Dim, P: Primitive<S>> Geometry<S, P> {
-    /// A BVH above [`BVH_THRESHOLD`] primitives, a flat list below.
+    /// A BVH above [`Dim::FLAT_LIST_MAX`] primitives, a flat list up to it.
     pub fn new(prims: Vec<P>) -> Self {
-        let accel = if prims.len() > BVH_THRESHOLD {
+        let accel = if prims.len() > S::FLAT_LIST_MAX {
             Accel::Bvh
         } else {
             Accel::Linear

@@ -137,10 +137,6 @@ pub struct BinaryTree {
     pub order: Vec<u32>,
 }
 
-/// Leaves hold at most this many primitives; a SAH split is forced above
-/// `FORCE_SPLIT` primitives even when a leaf looks cheaper.
-pub const MAX_LEAF: usize = 4;
-const FORCE_SPLIT: usize = 4 * MAX_LEAF;
 const BINS: usize = 16;
 /// Nodes of at least `2·CHUNK` primitives bin (and find their centre bounds) in
 /// chunks of `CHUNK` on rayon, merged in chunk order.
@@ -163,8 +159,8 @@ pub fn build<S: Dim>(n: usize, bounds: impl Fn(usize) -> Aabb<S> + Sync) -> Bina
         .with_min_len(CHUNK)
         .map(|i| Ref::new(Box4::outward(&bounds(i)), i as u32))
         .collect();
-    // Binary trees of the benchmark sphere have 0.6 nodes per primitive (2·n/MAX_LEAF
-    // was too few: the vector grew and was copied).
+    // Binary trees of the benchmark sphere have 0.6 nodes per primitive (2·n over
+    // the smallest split node was too few: the vector grew and was copied).
     let mut nodes = Vec::with_capacity(n);
     if !refs.is_empty() {
         let (root, centres) = chunked(
@@ -394,7 +390,7 @@ struct Split {
 /// exists (all centres coincide).
 fn split<S: Dim>(refs: &mut [Ref], bounds: Box4, centres: Box4) -> Option<Split> {
     let n = refs.len();
-    if n <= MAX_LEAF {
+    if n <= S::BVH_LEAF.0 {
         return None;
     }
     let grid = Grid::new::<S>(&centres);
@@ -435,7 +431,7 @@ fn split<S: Dim>(refs: &mut [Ref], bounds: Box4, centres: Box4) -> Option<Split>
         best_on_axis::<S>(&bins.boxes[a], &bins.counts[a], a, &mut best);
     }
     let (cost, axis, k, left_bounds, right_bounds) = best?;
-    if cost >= bounds.half_boundary::<S>() * n as f64 && n <= FORCE_SPLIT {
+    if cost >= bounds.half_boundary::<S>() * n as f64 && n <= S::BVH_LEAF.1 {
         return None; // a leaf is cheaper
     }
     // The partition also gathers each side's centres, which the children's bins

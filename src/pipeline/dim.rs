@@ -36,6 +36,14 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     /// Default refinement of a probe's march towards x (`probe::March`), measured
     /// per dimension.
     const PROBE_GRADING: f64;
+    /// The BVH's leaves (`bvh_build`): (a node of at most this many primitives is
+    /// a leaf, a node of more than this many is split; in between the SAH decides).
+    /// Measured per dimension: a segment test is a few multiplications, a
+    /// triangle's many more, against the same box tests of a node.
+    const BVH_LEAF: (usize, usize);
+    /// Up to this many primitives a flat list answers ray queries, above it the
+    /// BVH (`pipeline::bvh::Geometry::new`).
+    const FLAT_LIST_MAX: usize;
     /// The Henyey–Greenstein phase function of this dimension.
     type Phase: Copy + Debug + PartialEq + Send + Sync;
     /// `DIM` values: the vertices of a proxy element (segment or triangle), or the
@@ -170,6 +178,15 @@ impl Dim for D2 {
     /// tracing (tests/derivatives.rs, 12 points): median vector error 0.56 at k = 0,
     /// 0.23 at k = 3, 0.15 at k = 6, 0.25 at k = 9.
     const PROBE_GRADING: f64 = 6.0;
+    /// One pinned core, the 402-segment forest (`bench flatland`, three runs each):
+    /// closest hits 5.10–5.23 M/s with (4, 16), 5.89–5.94 with (2, 8), 6.06–6.11
+    /// with (1, 4), 6.15–6.18 with (1, 2).
+    const BVH_LEAF: (usize, usize) = (1, 2);
+    /// `bench flatland`'s random segment soups, one pinned core, with those leaves:
+    /// the tree answers 46.4 / 41.1 / 37.2 / 25.6 M closest hits/s at 2 / 3 / 4 / 6
+    /// segments, the flat list 44.8 / 32.8 / 28.7 / 21.8 (with leaves of up to 16,
+    /// the list was faster up to 6).
+    const FLAT_LIST_MAX: usize = 2;
     type Phase = Hg2;
     type Simplex<T: Element> = [T; 2];
 
@@ -278,6 +295,13 @@ impl Dim for D3 {
     /// at 0.3 of the step (`derivatives::GRADIENT_SMOOTHING_CAP`) it is 0.15, against
     /// 0.11 at k = 6 for 1.7× the probe's time.)
     const PROBE_GRADING: f64 = 0.0;
+    /// The 158,802-triangle sphere (`bench rays3d`, one pinned core): (2, 8) traced
+    /// 5.5 M closest hits/s against 6.6–7.0 with (4, 16), and built in 0.053 s
+    /// against 0.040.
+    const BVH_LEAF: (usize, usize) = (4, 16);
+    /// Taken over from 2D's first crossover, not measured in 3D: a tree of up to
+    /// 16 triangles is one leaf behind one box test anyway.
+    const FLAT_LIST_MAX: usize = 6;
     type Phase = Hg3;
     type Simplex<T: Element> = [T; 3];
 
