@@ -1,7 +1,7 @@
 //! `volcache bench tradeoff`: what users trade, time against error. Both cache
 //! methods are swept over target record counts (ε found by bisection, then the
 //! placement re-run from scratch so its time is honest) and path tracing over
-//! samples per pixel; error against one reference field (cached on disk). Writes the
+//! samples per pixel (or the cache methods over `--budgets`); error against one reference field (cached on disk). Writes the
 //! curves and each method's time to 3%, 1% and 0.3% relative RMSE
 //! ([`volcache::study::targets`]).
 
@@ -16,6 +16,7 @@ use volcache::figure::gradient_figure::{AWARE_PURPLE, REFERENCE_BLUE, UNAWARE_OR
 use volcache::figure::plot::{LineStyle, Plot, Series, draw_plot_into};
 use volcache::flatland::field::FieldParams;
 use volcache::output::{write_json, write_png};
+use volcache::pipeline::budget::schedule;
 use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
 use volcache::study::field_runs::{FieldMethod, MethodRun};
@@ -29,6 +30,11 @@ pub struct TradeoffArgs {
     /// Target record counts for the cache methods.
     #[arg(long, value_delimiter = ',', default_values_t = [50usize, 100, 200, 400, 800])]
     pub counts: Vec<usize>,
+    /// Sweep ours over these budgets (`--budget`, `pipeline::budget`) instead of
+    /// record counts: each point is one placement at the budget's ε and rays, no
+    /// search; jarosz08 is run at ours' record count with the same rays.
+    #[arg(long, value_delimiter = ',', conflicts_with = "counts")]
+    pub budgets: Option<Vec<f64>>,
     /// Samples per pixel for path tracing.
     #[arg(long, value_delimiter = ',', default_values_t = [1u32, 4, 16, 64, 256])]
     pub spps: Vec<u32>,
@@ -42,6 +48,8 @@ pub struct TradeoffArgs {
 struct Point {
     method: FieldMethod,
     target: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    budget: Option<f64>,
     spp: Option<u32>,
     #[serde(flatten)]
     run: MethodRun,
@@ -51,7 +59,10 @@ struct Point {
 struct Report<'a> {
     scene: &'a str,
     params: &'a FieldParams,
+    /// Directions per record of the count sweep (a budget sweep's are each budget's).
     rays_per_cache: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    budgets: Option<&'a [f64]>,
     per_part: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     direct_samples: Option<u32>,
@@ -71,31 +82,76 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     let (reference, ref_info) = reference(&scene, &fp, &a.cache)?;
     let progress = Progress::new();
     let mut points = Vec::new();
+    // Each sweep point: (record count, budget) and its options.
+    let sweep: Vec<(Option<usize>, Option<f64>, CacheArgs)> = match &a.budgets {
+        Some(budgets) => budgets
+            .iter()
+            .map(|&b| {
+                let args = CacheArgs {
+                    budget: Some(b),
+                    ..a.cache.clone()
+                };
+                (None, Some(b), args)
+            })
+            .collect(),
+        // ε for k records, then a fresh placement at that ε, timed.
+        None => a
+            .counts
+            .iter()
+            .map(|&k| {
+                let args = CacheArgs {
+                    caches: Some(k),
+                    ..a.cache.clone()
+                };
+                (Some(k), None, args)
+            })
+            .collect(),
+    };
+    for args in sweep.iter().map(|s| &s.2) {
+        check_cache_args(args, &fp)?;
+    }
     for method in [FieldMethod::Ours, FieldMethod::Jarosz08] {
-        for &k in &a.counts {
-            // ε for k records, then a fresh placement at that ε, timed.
-            let target = CacheArgs {
-                caches: Some(k),
-                ..a.cache.clone()
+        for (k, budget, target) in &sweep {
+            // Under a budget, jarosz08 (whose ε means something else) at ours' count.
+            let (k, target) = match (method, budget) {
+                (FieldMethod::Jarosz08, Some(b)) => {
+                    let Some(ours) = points.iter().find(|p: &&Point| p.budget == Some(*b)) else {
+                        continue;
+                    };
+                    let args = CacheArgs {
+                        budget: None,
+                        caches: Some(ours.run.records),
+                        rays: schedule(*b).rays,
+                        ..a.cache.clone()
+                    };
+                    (Some(ours.run.records), std::borrow::Cow::Owned(args))
+                }
+                _ => (*k, std::borrow::Cow::Borrowed(target)),
+            };
+            let label = match (budget, k) {
+                (Some(b), Some(k)) => format!("budget {b} (at {k} records)"),
+                (Some(b), None) => format!("budget {b}"),
+                (None, k) => format!("{:>5}", k.unwrap_or(0)),
             };
             let run = match run_method(&scene, &fp, method, 0, &target, &reference, &progress) {
                 Ok(run) => run,
                 // A count out of reach of this method is left out of its curve.
                 Err(e @ CountError::Unreachable { .. }) => {
-                    eprintln!("{method:?} {k:>5}: skipped: {e}");
+                    eprintln!("{method:?} {label}: skipped: {e}");
                     continue;
                 }
                 Err(e) => return Err(e.into()),
             };
             eprintln!(
-                "{method:?} {k:>5}: {} records, {:.2} s, RMSE {:.4e}",
+                "{method:?} {label}: {} records, {:.2} s, RMSE {:.4e}",
                 run.records,
                 run.seconds_total,
                 run.errors.unwrap_or_default().rmse
             );
             points.push(Point {
                 method,
-                target: Some(k),
+                target: k,
+                budget: *budget,
                 spp: None,
                 run,
             });
@@ -111,6 +167,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
         points.push(Point {
             method: FieldMethod::Pt,
             target: None,
+            budget: None,
             spp: Some(spp),
             run,
         });
@@ -121,6 +178,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
         scene: &scene.source,
         params: &fp,
         rays_per_cache: a.cache.rays,
+        budgets: a.budgets.as_deref(),
         per_part: a.cache.per_part,
         direct_samples: a.cache.direct_samples,
         edge_reach: a.cache.edge_reach,

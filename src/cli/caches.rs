@@ -15,6 +15,7 @@ use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::scene::Scene;
 use volcache::limits;
 use volcache::output::OutputPlan;
+use volcache::pipeline::budget::{MAX_BUDGET, MIN_BUDGET, schedule};
 use volcache::pipeline::path::Sampling;
 use volcache::pipeline::placement::CountError;
 use volcache::progress::Progress;
@@ -31,6 +32,12 @@ pub struct CacheArgs {
     /// Equal-count mode: search ε so that the method places this many records (±1%).
     #[arg(long, conflicts_with = "eps")]
     pub caches: Option<usize>,
+    /// One budget for the cache (`pipeline::budget`): B = 1 is ε 0.025 with 256
+    /// directions per record; a budget k times larger costs about k times as much,
+    /// spent on smaller ε and more directions as the measured error model says.
+    /// Sets --eps and --rays; for ours only (the model was measured for ours).
+    #[arg(long, conflicts_with_all = ["eps", "caches", "rays"])]
+    pub budget: Option<f64>,
     /// Directions per cache point.
     #[arg(long, default_value_t = 1024)]
     pub rays: usize,
@@ -104,6 +111,13 @@ pub struct CachesArgs {
     pub out: PathBuf,
 }
 
+impl CacheArgs {
+    /// Directions per record: `--rays`, or `--budget`'s.
+    pub fn rays_per_record(&self) -> usize {
+        self.budget.map_or(self.rays, |b| schedule(b).rays)
+    }
+}
+
 pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
     let mut fp = FieldParams::from_scene(scene);
     match a.res {
@@ -117,7 +131,14 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
 
 /// The options' cache settings (`fp.seed` is `--seed`, see [`field_params`]).
 pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
-    let mut cs = field_runs::cache_settings(method, a.eps.unwrap_or(0.05), fp, a.rays, a.steps);
+    let (eps, rays) = match a.budget {
+        Some(b) => {
+            let s = schedule(b);
+            (s.eps, s.rays)
+        }
+        None => (a.eps.unwrap_or(0.05), a.rays),
+    };
+    let mut cs = field_runs::cache_settings(method, eps, fp, rays, a.steps);
     cs.probe.grading = a.grading;
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
@@ -150,6 +171,8 @@ struct Summary<'a> {
     scene: &'a str,
     params: &'a FieldParams,
     rays_per_cache: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    budget: Option<f64>,
     per_part: bool,
     second_order: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -188,6 +211,9 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
     if let Some(eps) = a.eps {
         check_range("--eps", eps, limits::EPS)?;
     }
+    if let Some(b) = a.budget {
+        check_range("--budget", b, (MIN_BUDGET, MAX_BUDGET))?;
+    }
     if let Some(k) = a.caches {
         check_count("--caches", k as u64, (fp.width * fp.height) as u64)?;
     }
@@ -212,6 +238,11 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     let fp = field_params(&scene, &a.cache);
     check_cache_args(&a.cache, &fp)?;
     check_spp("--spp", a.spp, limits::MAX_SPP)?;
+    anyhow::ensure!(
+        a.cache.budget.is_none() || a.method == FieldMethod::Ours,
+        "--budget schedules ours (its error model was measured for ours): with --method {}, give --eps or --caches",
+        format!("{:?}", a.method).to_lowercase()
+    );
     let mut plan = OutputPlan::new();
     if let Some(s) = &a.scene {
         plan.input("the scene", s);
@@ -252,7 +283,8 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
     let summary = Summary {
         scene: &scene.source,
         params: &fp,
-        rays_per_cache: a.cache.rays,
+        rays_per_cache: a.cache.rays_per_record(),
+        budget: a.cache.budget,
         per_part: a.cache.per_part,
         direct_samples: a.cache.direct_samples,
         edge_reach: a.cache.edge_reach,

@@ -7,6 +7,7 @@
 //! implement [`world::World`] and supply their query points; nothing here knows
 //! files, cameras or images.
 
+pub mod budget;
 pub mod bvh;
 mod bvh_build;
 mod bvh_wide;
