@@ -104,7 +104,8 @@ fn volcache() -> std::process::Command {
 
 /// `caches --budget`: the summary says the budget and the rays it chose; a budget
 /// out of range, given with --eps, or for a method it was not measured for is a
-/// clear error (exit 2) and writes nothing.
+/// clear error (exit 2) and writes nothing; so is a budget where it would mean
+/// something else.
 #[test]
 fn caches_takes_a_budget() {
     let d = tempfile::tempdir().unwrap();
@@ -133,6 +134,32 @@ fn caches_takes_a_budget() {
         (vec!["--budget", "2", "--method", "jarosz08"], "with --method jarosz08"),
     ] {
         let out = base("bad").args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    assert!(!d.path().join("bad").exists());
+    // Where a budget would mean something else, it is refused too: figure compare
+    // runs both caches at one count, and a budget sweep sets its own ε and rays.
+    for (args, says) in [
+        (
+            vec!["figure", "compare", "--budget", "1"],
+            "--budget schedules ours alone",
+        ),
+        (
+            vec!["bench", "tradeoff", "--budgets", "1,4", "--rays", "64"],
+            "cannot be used with",
+        ),
+    ] {
+        let out = volcache()
+            .args(&args)
+            .arg(&scene)
+            .arg("--out")
+            .arg(d.path().join("bad"))
+            .arg("--ref-cache")
+            .arg(d.path().join("ref"))
+            .output()
+            .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(says), "{args:?}: {err}");

@@ -1,9 +1,9 @@
 //! `volcache bench tradeoff`: what users trade, time against error. Both cache
 //! methods are swept over target record counts (ε found by bisection, then the
-//! placement re-run from scratch so its time is honest) and path tracing over
-//! samples per pixel (or the cache methods over `--budgets`); error against one reference field (cached on disk). Writes the
-//! curves and each method's time to 3%, 1% and 0.3% relative RMSE
-//! ([`volcache::study::targets`]).
+//! placement re-run from scratch so its time is honest) — or ours over budgets
+//! (`--budgets`) and jarosz08 at ours' counts — and path tracing over samples per
+//! pixel; error against one reference field (cached on disk). Writes the curves and
+//! each method's time to 3%, 1% and 0.3% relative RMSE ([`volcache::study::targets`]).
 
 use super::caches::{CacheArgs, check_cache_args, field_params, reference, run_method};
 use super::common::{load_scene, scene_stem, wrote};
@@ -33,7 +33,7 @@ pub struct TradeoffArgs {
     /// Sweep ours over these budgets (`--budget`, `pipeline::budget`) instead of
     /// record counts: each point is one placement at the budget's ε and rays, no
     /// search; jarosz08 is run at ours' record count with the same rays.
-    #[arg(long, value_delimiter = ',', conflicts_with = "counts")]
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["counts", "eps", "caches", "rays"])]
     pub budgets: Option<Vec<f64>>,
     /// Samples per pixel for path tracing.
     #[arg(long, value_delimiter = ',', default_values_t = [1u32, 4, 16, 64, 256])]

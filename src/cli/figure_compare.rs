@@ -53,6 +53,10 @@ fn caption(r: &MethodRun) -> String {
 pub fn run(a: CompareArgs) -> anyhow::Result<ExitCode> {
     let scene = load_scene(a.scene.as_deref())?;
     let stem = scene_stem(a.scene.as_deref());
+    anyhow::ensure!(
+        a.cache.budget.is_none(),
+        "figure compare runs both caches at one record count (--caches) or ε (--eps): --budget schedules ours alone (use caches or bench tradeoff --budgets)"
+    );
     let mut cache = a.cache.clone();
     if cache.caches.is_none() && cache.eps.is_none() {
         cache.caches = Some(200);
