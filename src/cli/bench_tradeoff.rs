@@ -50,6 +50,9 @@ struct Point {
     target: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     budget: Option<f64>,
+    /// Directions per record (cache methods).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rays_per_record: Option<usize>,
     spp: Option<u32>,
     #[serde(flatten)]
     run: MethodRun,
@@ -59,8 +62,9 @@ struct Point {
 struct Report<'a> {
     scene: &'a str,
     params: &'a FieldParams,
-    /// Directions per record of the count sweep (a budget sweep's are each budget's).
-    rays_per_cache: usize,
+    /// Directions per record of a count sweep (a budget sweep's points say theirs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rays_per_cache: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     budgets: Option<&'a [f64]>,
     per_part: bool,
@@ -152,6 +156,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                 method,
                 target: k,
                 budget: *budget,
+                rays_per_record: Some(target.rays_per_record()),
                 spp: None,
                 run,
             });
@@ -168,6 +173,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
             method: FieldMethod::Pt,
             target: None,
             budget: None,
+            rays_per_record: None,
             spp: Some(spp),
             run,
         });
@@ -177,7 +183,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     let report = Report {
         scene: &scene.source,
         params: &fp,
-        rays_per_cache: a.cache.rays,
+        rays_per_cache: a.budgets.is_none().then_some(a.cache.rays),
         budgets: a.budgets.as_deref(),
         per_part: a.cache.per_part,
         direct_samples: a.cache.direct_samples,
