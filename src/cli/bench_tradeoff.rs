@@ -86,52 +86,47 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
     let (reference, ref_info) = reference(&scene, &fp, &a.cache)?;
     let progress = Progress::new();
     let mut points = Vec::new();
-    // Each sweep point: (record count, budget) and its options.
-    let sweep: Vec<(Option<usize>, Option<f64>, CacheArgs)> = match &a.budgets {
+    // The sweep's options, one set per point: a budget, or a record count (ε for k
+    // records, then a fresh placement at that ε, timed).
+    let sweep: Vec<CacheArgs> = match &a.budgets {
         Some(budgets) => budgets
             .iter()
-            .map(|&b| {
-                let args = CacheArgs {
-                    budget: Some(b),
-                    ..a.cache.clone()
-                };
-                (None, Some(b), args)
+            .map(|&b| CacheArgs {
+                budget: Some(b),
+                ..a.cache.clone()
             })
             .collect(),
-        // ε for k records, then a fresh placement at that ε, timed.
         None => a
             .counts
             .iter()
-            .map(|&k| {
-                let args = CacheArgs {
-                    caches: Some(k),
-                    ..a.cache.clone()
-                };
-                (Some(k), None, args)
+            .map(|&k| CacheArgs {
+                caches: Some(k),
+                ..a.cache.clone()
             })
             .collect(),
     };
-    for args in sweep.iter().map(|s| &s.2) {
+    for args in &sweep {
         check_cache_args(args, &fp)?;
     }
     for method in [FieldMethod::Ours, FieldMethod::Jarosz08] {
-        for (k, budget, target) in &sweep {
+        for args in &sweep {
+            let budget = args.budget;
             // Under a budget, jarosz08 (whose ε means something else) at ours' count.
-            let (k, target) = match (method, budget) {
+            let target = match (method, budget) {
                 (FieldMethod::Jarosz08, Some(b)) => {
-                    let Some(ours) = points.iter().find(|p: &&Point| p.budget == Some(*b)) else {
+                    let Some(ours) = points.iter().find(|p: &&Point| p.budget == Some(b)) else {
                         continue;
                     };
-                    let args = CacheArgs {
+                    std::borrow::Cow::Owned(CacheArgs {
                         budget: None,
                         caches: Some(ours.run.records),
-                        rays: schedule(*b).rays,
+                        rays: schedule(b).rays,
                         ..a.cache.clone()
-                    };
-                    (Some(ours.run.records), std::borrow::Cow::Owned(args))
+                    })
                 }
-                _ => (*k, std::borrow::Cow::Borrowed(target)),
+                _ => std::borrow::Cow::Borrowed(args),
             };
+            let k = target.caches;
             let label = match (budget, k) {
                 (Some(b), Some(k)) => format!("budget {b} (at {k} records)"),
                 (Some(b), None) => format!("budget {b}"),
@@ -155,7 +150,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
             points.push(Point {
                 method,
                 target: k,
-                budget: *budget,
+                budget,
                 rays_per_record: Some(target.rays_per_record()),
                 spp: None,
                 run,

@@ -112,9 +112,21 @@ pub struct CachesArgs {
 }
 
 impl CacheArgs {
+    /// ε and directions per record: `--eps` (default 0.05) and `--rays`, or
+    /// `--budget`'s.
+    fn eps_and_rays(&self) -> (f64, usize) {
+        match self.budget {
+            Some(b) => {
+                let s = schedule(b);
+                (s.eps, s.rays)
+            }
+            None => (self.eps.unwrap_or(0.05), self.rays),
+        }
+    }
+
     /// Directions per record: `--rays`, or `--budget`'s.
     pub fn rays_per_record(&self) -> usize {
-        self.budget.map_or(self.rays, |b| schedule(b).rays)
+        self.eps_and_rays().1
     }
 }
 
@@ -131,13 +143,7 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
 
 /// The options' cache settings (`fp.seed` is `--seed`, see [`field_params`]).
 pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
-    let (eps, rays) = match a.budget {
-        Some(b) => {
-            let s = schedule(b);
-            (s.eps, s.rays)
-        }
-        None => (a.eps.unwrap_or(0.05), a.rays),
-    };
+    let (eps, rays) = a.eps_and_rays();
     let mut cs = field_runs::cache_settings(method, eps, fp, rays, a.steps);
     cs.probe.grading = a.grading;
     cs.per_part = a.per_part;

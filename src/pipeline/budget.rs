@@ -17,8 +17,6 @@
 //! point where the grid measured both terms alike: ε = 0.025 with 256 rays (at
 //! ε ≤ 0.0125 more rays began to pay, above it they did not).
 
-use serde::Serialize;
-
 /// Exponent of the interpolation error in ε (see the module's model).
 pub const ERROR_EXPONENT_P: f64 = 0.3;
 /// Exponent of the record count in 1/ε.
@@ -33,9 +31,8 @@ pub const MIN_BUDGET: f64 = 1.0 / 16.0;
 pub const MAX_BUDGET: f64 = 4096.0;
 
 /// What a budget sets.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Schedule {
-    pub budget: f64,
     pub eps: f64,
     pub rays: usize,
 }
@@ -45,12 +42,9 @@ pub fn schedule(b: f64) -> Schedule {
     let b = b.clamp(MIN_BUDGET, MAX_BUDGET);
     let denom = 2.0 * ERROR_EXPONENT_P + COUNT_EXPONENT_Q;
     let eps = EPS_AT_ONE * b.powf(-1.0 / denom);
+    // At least 56 directions: the budget is clamped.
     let rays = (RAYS_AT_ONE * b.powf(2.0 * ERROR_EXPONENT_P / denom)).round() as usize;
-    Schedule {
-        budget: b,
-        eps,
-        rays: rays.max(16),
-    }
+    Schedule { eps, rays }
 }
 
 #[cfg(test)]
