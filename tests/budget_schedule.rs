@@ -23,9 +23,9 @@ const TWO_BARS: &str = r#"{
 
 /// (RMSE, placement rays) of ours at budget `b` and seed `seed`.
 fn run(scene: &Scene, fp: &FieldParams, reference: &volcache::flatland::field::Field, b: f64, seed: u64) -> (f64, u64) {
-    let s = schedule(b);
+    let (eps, rays) = schedule(b);
     let fp = FieldParams { seed, ..fp.clone() };
-    let cs = cache_settings(CacheMethod::Ours, s.eps, &fp, s.rays, 16);
+    let cs = cache_settings(CacheMethod::Ours, eps, &fp, rays, 16);
     let r = cache_run(scene, &fp, &cs, None, reference, &Progress::new()).unwrap();
     (r.errors.unwrap().rmse, r.rays_placement)
 }
@@ -123,10 +123,10 @@ fn caches_takes_a_budget() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.path().join("ok/summary.json")).unwrap()).unwrap();
-    let s = schedule(0.25);
+    let (eps, rays) = schedule(0.25);
     assert_eq!(summary["budget"], 0.25);
-    assert_eq!(summary["rays_per_cache"], s.rays);
-    assert_eq!(summary["run"]["eps"], s.eps);
+    assert_eq!(summary["rays_per_cache"], rays);
+    assert_eq!(summary["run"]["eps"], eps);
     for (args, says) in [
         (vec!["--budget", "1e5"], "--budget must lie between"),
         (vec!["--budget", "nan"], "--budget must lie between"),

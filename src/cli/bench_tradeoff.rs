@@ -120,7 +120,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                     std::borrow::Cow::Owned(CacheArgs {
                         budget: None,
                         caches: Some(ours.run.records),
-                        rays: schedule(b).rays,
+                        rays: schedule(b).1,
                         ..a.cache.clone()
                     })
                 }

@@ -1,14 +1,17 @@
 //! `volcache bench tradeoff3d`: time against error in 3D. Both cache methods are
 //! swept over target record counts (ε searched with memoised light fields; each
 //! run's time is its placement — checks plus the capture time of the records it
-//! uses — plus its reconstruction) and path tracing over samples per pixel; errors
+//! uses — plus its reconstruction) — or ours over budgets (`--budgets`, each one
+//! placement at its ε, directions and camera samples) and jarosz08 at ours' counts
+//! with the same directions and camera samples — and path tracing over samples per
+//! pixel; errors
 //! of the image and of its medium part against one converged reference. Reports
 //! rays/s, records/s, the speedup of ours over Jarosz 2008 at equal error and each
 //! method's time to 3%, 1% and 0.3% relative RMSE ([`volcache::study::targets`]).
 
-use super::common::{ProgressUi, wrote};
+use super::common::{ProgressUi, check_range, wrote};
 use super::render3d_cache::Cache3dArgs;
-use super::setup3d::{Setup3dArgs, run_cache, setup3d};
+use super::setup3d::{CachePoint, Setup3dArgs, run_cache, setup3d};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -18,13 +21,14 @@ use volcache::figure::axis::Axis;
 use volcache::figure::gradient_figure::{AWARE_PURPLE, REFERENCE_BLUE, UNAWARE_ORANGE};
 use volcache::figure::plot::{LineStyle, Plot, Series, draw_plot_into};
 use volcache::output::{write_json, write_png};
+use volcache::pipeline::budget::{MAX_BUDGET, MIN_BUDGET};
 use volcache::pipeline::placement::CountError;
 use volcache::study::reference3d::ReferenceInfo3d;
 use volcache::study::runs3d::{Run3d, curve, pt_run};
 use volcache::study::seeds::pt_seed;
 use volcache::study::speedup::{Speedup, speedups};
 use volcache::study::targets::{TargetRow, rows_3d, table_text};
-use volcache::volume::cached::RecordMemo;
+use volcache::volume::cached::{RecordMemo, budget_settings};
 use volcache::volume::render::RenderParams;
 
 #[derive(Args, Debug)]
@@ -34,6 +38,12 @@ pub struct Tradeoff3dArgs {
     /// Target record counts for the cache methods.
     #[arg(long, value_delimiter = ',', default_values_t = [50usize, 100, 200, 400, 800])]
     pub counts: Vec<usize>,
+    /// Sweep ours over these budgets (`render3d --budget`) instead of record
+    /// counts: each point one placement at the budget's ε, directions and camera
+    /// samples, no search; jarosz08 at ours' record count with the same directions
+    /// and camera samples (the equal-count protocol).
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["counts", "eps", "caches", "rays", "spp"])]
+    pub budgets: Option<Vec<f64>>,
     /// Samples per pixel for path tracing.
     #[arg(long, value_delimiter = ',', default_values_t = [4u32, 16, 64, 256])]
     pub spps: Vec<u32>,
@@ -49,7 +59,11 @@ pub struct Tradeoff3dArgs {
 struct Report<'a> {
     scene: &'a str,
     params: &'a RenderParams,
-    rays_per_cache: usize,
+    /// Directions per record of a count sweep (a budget sweep's runs say theirs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rays_per_cache: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    budgets: Option<&'a [f64]>,
     steps: usize,
     march_step: Option<f64>,
     surface_paths: u32,
@@ -64,24 +78,86 @@ struct Report<'a> {
 pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
     let setup = setup3d(&a.setup, a.quiet)?;
     let (scene, stem, image) = (&setup.scene, &setup.stem, &setup.image);
-    let mut runs = Vec::new();
+    if let Some(budgets) = &a.budgets {
+        anyhow::ensure!(!budgets.is_empty(), "--budgets needs at least one budget");
+        for &b in budgets {
+            check_range("--budgets", b, (MIN_BUDGET, MAX_BUDGET))?;
+        }
+    }
+    let mut runs: Vec<Run3d> = Vec::new();
     for method in [CacheMethod::Ours, CacheMethod::Jarosz08] {
         // One memo across the counts: each run is charged its own records' captures.
         let mut memo = RecordMemo::new();
-        for &k in &a.counts {
-            let label = format!("{stem} {method:?} {k}");
-            let r = match run_cache(&setup, method, &a.cache, Some(k), &mut memo, &label, a.quiet) {
+        // The sweep's points, with their labels and budgets.
+        let points: Vec<(String, CachePoint, Option<f64>)> = match &a.budgets {
+            None => a
+                .counts
+                .iter()
+                .map(|&k| {
+                    let point = CachePoint {
+                        cache: a.cache.clone(),
+                        image: image.clone(),
+                        target: Some(k),
+                    };
+                    (format!("{k:>5}"), point, None)
+                })
+                .collect(),
+            Some(budgets) => budgets
+                .iter()
+                .filter_map(|&b| {
+                    let (eps, rays, spp) = budget_settings(scene, b);
+                    let image = RenderParams { spp, ..image.clone() };
+                    let cache = Cache3dArgs {
+                        rays,
+                        ..a.cache.clone()
+                    };
+                    match method {
+                        CacheMethod::Ours => {
+                            let cache = Cache3dArgs {
+                                eps: Some(eps),
+                                ..cache
+                            };
+                            let point = CachePoint {
+                                cache,
+                                image,
+                                target: None,
+                            };
+                            Some((format!("budget {b}"), point, Some(b)))
+                        }
+                        // Jarosz 2008 (whose ε means something else) at ours' count.
+                        CacheMethod::Jarosz08 => {
+                            let ours = runs.iter().find(|r| r.method == "ours" && r.budget == Some(b))?;
+                            let label = format!("budget {b} (at {} records)", ours.records);
+                            let point = CachePoint {
+                                cache,
+                                image,
+                                target: Some(ours.records),
+                            };
+                            Some((label, point, Some(b)))
+                        }
+                    }
+                })
+                .collect(),
+        };
+        for (label, point, budget) in points {
+            // Each budget's records differ in directions: their own memo.
+            if budget.is_some() {
+                memo = RecordMemo::new();
+            }
+            let bar = format!("{stem} {method:?} {label}");
+            let mut r = match run_cache(&setup, method, &point, &mut memo, &bar, a.quiet) {
                 Ok(r) => r,
                 // A count out of reach of this method is left out of its curve.
                 Err(e) if matches!(e.downcast_ref(), Some(CountError::Unreachable { .. })) => {
-                    eprintln!("{method:?} {k:>5}: skipped: {e}");
+                    eprintln!("{method:?} {label}: skipped: {e}");
                     continue;
                 }
                 Err(e) => return Err(e),
             };
+            r.budget = budget;
             eprintln!(
-                "{:>8} {k:>5}: {} records, {:.2} s ({:.2} placement), RMSE {:.4e}, medium {:.4e}",
-                r.method, r.records, r.seconds, r.placement_seconds, r.errors.rmse, r.medium_errors.rmse
+                "{:>8} {label}: {} records, {} spp, {:.2} s ({:.2} placement), RMSE {:.4e}, medium {:.4e}",
+                r.method, r.records, r.spp, r.seconds, r.placement_seconds, r.errors.rmse, r.medium_errors.rmse
             );
             runs.push(r);
         }
@@ -119,7 +195,8 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
     let report = Report {
         scene: &scene.source,
         params: image,
-        rays_per_cache: a.cache.rays,
+        rays_per_cache: a.budgets.is_none().then_some(a.cache.rays),
+        budgets: a.budgets.as_deref(),
         steps: a.cache.steps,
         march_step: a.cache.march_step,
         surface_paths: a.cache.surface_paths,

@@ -116,10 +116,7 @@ impl CacheArgs {
     /// `--budget`'s.
     fn eps_and_rays(&self) -> (f64, usize) {
         match self.budget {
-            Some(b) => {
-                let s = schedule(b);
-                (s.eps, s.rays)
-            }
+            Some(b) => schedule(b),
             None => (self.eps.unwrap_or(0.05), self.rays),
         }
     }

@@ -95,6 +95,9 @@ pub struct Summary3d {
     /// Closest-hit queries per second on random rays (--bench-rays).
     pub rays3d_closest_hit_per_second: Option<f64>,
     pub cache: Option<CacheSummary>,
+    /// `--budget`, when it set ε, the directions and the camera samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub budget: Option<f64>,
     pub errors: Option<ReferenceErrors>,
     /// Files, relative to the summary's folder.
     pub exr: String,

@@ -7,7 +7,8 @@
 //! `--records-in`.
 
 use super::common::{
-    ProgressUi, RENDER3D_BYTES_PER_PIXEL, cancelled, check_exposure, check_plan, check_spp, ensure_memory, parse_res,
+    ProgressUi, RENDER3D_BYTES_PER_PIXEL, cancelled, check_exposure, check_plan, check_range, check_spp, ensure_memory,
+    parse_res,
 };
 use super::image3d::{
     CacheSummary, Summary3d, mean_luminance, medium_path, output_paths, parse_crop, parse_tile, reference_errors,
@@ -21,7 +22,9 @@ use std::process::ExitCode;
 use volcache::core::metric::CacheMethod;
 use volcache::limits;
 use volcache::output::OutputPlan;
+use volcache::pipeline::budget::{MAX_BUDGET, MIN_BUDGET};
 use volcache::pipeline::path::Sampling;
+use volcache::volume::cached::budget_settings;
 use volcache::volume::records_file::scene_hash;
 use volcache::volume::render::{RenderParams, Rendered, ray_cast_rate, render};
 use volcache::volume::scene::Scene;
@@ -66,7 +69,7 @@ pub struct Render3dArgs {
     pub method: Method,
     /// Samples per pixel (pt default: the scene's; caches: camera samples, default 4;
     /// with --time-budget: the most, default unlimited).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "budget")]
     pub spp: Option<u32>,
     /// Resolution WxH (default: the scene's render block).
     #[arg(long, value_parser = parse_res)]
@@ -83,8 +86,15 @@ pub struct Render3dArgs {
     /// in all. Cache methods: the records' placement counts, and --spp is the camera
     /// samples placement visits (default 4); the time left adds camera samples
     /// (interpolation is cheap), points no record covers being path traced.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "budget")]
     pub time_budget: Option<f64>,
+    /// One budget for ours (`pipeline::budget::VOLUME`): B = 1 is ε a quarter of
+    /// the scene's default, 256 directions per record and 16 camera samples per
+    /// pixel; a budget k times larger costs about k times as much, spent where the
+    /// measured error model says it pays (ε, directions and camera samples, so that
+    /// their errors fall alike). Sets --eps, --rays and --spp.
+    #[arg(long, conflicts_with_all = ["eps", "caches", "rays", "records_in"])]
+    pub budget: Option<f64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full image (same samples as
     /// the full render, so crops tile it; cache methods: when they reconstruct from
     /// the full image's records, --records-in, else they place records for the crop).
@@ -138,6 +148,7 @@ pub fn summary(scene: &Scene, method: Method, params: &RenderParams, img: &Rende
         triangles: scene.geometry.len(),
         rays3d_closest_hit_per_second: None,
         cache: None,
+        budget: None,
         errors: None,
         exr: String::new(),
         medium_exr: String::new(),
@@ -152,6 +163,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         .file_stem()
         .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let mut params = RenderParams::from_scene(&scene);
+    let mut cache = a.cache.clone();
     params.settings.sampling = a.sampling;
     if let Some([w, h]) = a.res {
         (params.width, params.height) = (w as usize, h as usize);
@@ -167,6 +179,15 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
             // --spp is then the camera samples placement visits; more follow.
             _ => 1 << 24,
         };
+    } else if let Some(b) = a.budget {
+        check_range("--budget", b, (MIN_BUDGET, MAX_BUDGET))?;
+        anyhow::ensure!(
+            a.method == Method::Ours,
+            "--budget schedules ours (its error model was measured for ours): with --method {}, give --spp (and --eps or --caches)",
+            a.method.name()
+        );
+        let (eps, rays, spp) = budget_settings(&scene, b);
+        (cache.eps, cache.rays, params.spp) = (Some(eps), rays, spp);
     } else if let Some(s) = a.spp {
         check_spp("--spp", s, limits::MAX_SPP)?;
         params.spp = s;
@@ -196,7 +217,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
             .map_err(anyhow::Error::from),
         Some(m) => {
             let place_spp = a.time_budget.map(|_| a.spp.unwrap_or(4));
-            run_cached(&scene, (&params, place_spp), m, &a.cache, &a.records, &progress).map(|(img, c)| (img, Some(c)))
+            run_cached(&scene, (&params, place_spp), m, &cache, &a.records, &progress).map(|(img, c)| (img, Some(c)))
         }
     };
     ui.finish();
@@ -216,6 +237,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
     };
     let mut summary = summary(&scene, a.method, &params, &img);
     summary.cache = cache;
+    summary.budget = a.budget;
     summary.exposure = exposure;
     summary.rays3d_closest_hit_per_second = a.bench_rays.map(|n| ray_cast_rate(&scene, n.max(1), params.seed));
     if let Some(r) = &a.reference {

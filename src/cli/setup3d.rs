@@ -66,20 +66,27 @@ pub fn setup3d(a: &Setup3dArgs, quiet: bool) -> anyhow::Result<Setup3d> {
     })
 }
 
-/// `method` with the options' cache settings at `target` records (or their ε),
-/// with a progress bar.
+/// One cache run of a comparison: the cache options, the image it renders (the
+/// setup's, or one with a budget's camera samples) and the record count it
+/// searches for (None: the options' ε).
+pub struct CachePoint {
+    pub cache: Cache3dArgs,
+    pub image: RenderParams,
+    pub target: Option<usize>,
+}
+
+/// `method` at `point`, with a progress bar.
 pub fn run_cache(
     s: &Setup3d,
     method: CacheMethod,
-    a: &Cache3dArgs,
-    target: Option<usize>,
+    point: &CachePoint,
     memo: &mut RecordMemo,
     label: &str,
     quiet: bool,
 ) -> anyhow::Result<Run3d> {
-    let (cs, cp) = a.settings(&s.scene, &s.image, method)?;
+    let (cs, cp) = point.cache.settings(&s.scene, &point.image, method)?;
     let ui = ProgressUi::new(label, !quiet);
-    let r = cache_run(&s.scene, &cs, &cp, target, memo, &s.reference, &ui.progress);
+    let r = cache_run(&s.scene, &cs, &cp, point.target, memo, &s.reference, &ui.progress);
     ui.finish();
     Ok(r?)
 }

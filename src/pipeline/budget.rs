@@ -1,75 +1,175 @@
 //! One budget parameter for a radiance cache: a budget B (1 = the reference point
-//! below, 4 = four times its cost) decides the error threshold ε and the rays of
-//! each record, so that a user who wants a better image asks for more budget and
-//! the schedule spends it where the error model says it pays.
+//! below, 4 = four times its cost) decides the error threshold ε, the rays of each
+//! record and, in 3D, the camera samples per pixel, so that a user who wants a
+//! better image asks for more budget and the schedule spends it where the error
+//! model says it pays.
 //!
-//! The error model (measured with `volcache caches` at 64², ours, seeds 1–2,
-//! ε 0.1 … 0.00625, 256 / 1024 / 4096 rays; numbers in the commit):
-//! - records K ∝ ε^−q with q ≈ 0.5 (occluder 0.49–0.52, windows 0.49–0.56), and
-//!   the placement's time ∝ K · rays (0.46–0.54 against ε);
-//! - the interpolation error ∝ ε^p with p ≈ 0.3 (occluder 0.24–0.37, windows
-//!   0.24–0.30);
-//! - the records' noise ∝ rays^−½ (Monte Carlo).
+//! The error model: the squared error is a sum of terms, each a power of one knob,
+//! - the interpolation error ∝ ε^p, its square A ε^{2p}, with records K ∝ ε^−q;
+//! - the records' noise, C / rays (Monte Carlo);
+//! - in 3D, the camera samples' noise, D / spp (the pixel's footprint, the first
+//!   surface's light and the march are sampled per camera sample), whose cost
+//!   grows as spp^s (the placement visits every camera sample's march points and
+//!   places more records for them; the image's own cost is linear in spp).
 //!
-//! Minimising E² = A ε^{2p} + C / rays at a cost T ∝ ε^−q · rays gives
-//! ε ∝ T^{−1/(2p+q)}, rays ∝ T^{2p/(2p+q)}, and an error falling as
-//! T^{−p/(2p+q)} ≈ T^−0.27 (the two error terms in the ratio q : 2p). B = 1 is a
-//! point where the grid measured both terms alike: ε = 0.025 with 256 rays (at
-//! ε ≤ 0.0125 more rays began to pay, above it they did not).
+//! The placement's time is ∝ K · rays. Minimising the sum at a cost T ∝
+//! ε^−q · rays · spp^s, Lagrange's condition makes every term fall alike, as
+//! T^−γ with γ = 1 / (1 + q/(2p) + s): ε ∝ T^{−γ/(2p)}, rays ∝ T^γ, spp ∝ T^γ, and
+//! the error ∝ T^{−γ/2}. (2D fields have no camera samples: s = 0, γ = 2p/(2p+q).)
+//! B = 1 is a point where the measurements saw the terms alike, so that the
+//! schedule starts balanced and stays so.
 
-/// Exponent of the interpolation error in ε (see the module's model).
-pub const ERROR_EXPONENT_P: f64 = 0.3;
-/// Exponent of the record count in 1/ε.
-pub const COUNT_EXPONENT_Q: f64 = 0.5;
-/// ε at budget 1.
+/// A measured error model: exponents and the budget's reference point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorModel {
+    /// Exponent of the interpolation error in ε.
+    pub error_exponent_p: f64,
+    /// Exponent of the record count in 1/ε.
+    pub count_exponent_q: f64,
+    /// Exponent of the cost in the camera samples per pixel, and the camera
+    /// samples at budget 1 (None: the method has no camera samples to schedule).
+    pub camera: Option<(f64, f64)>,
+    /// Rays per record at budget 1.
+    pub rays_at_one: f64,
+}
+
+/// 2D fields (`volcache caches --budget`), measured with `volcache caches` at 64²,
+/// ours, seeds 1–2, ε 0.1 … 0.00625, 256 / 1024 / 4096 rays (numbers in the
+/// commit): K ∝ ε^−0.5 (occluder 0.49–0.52, windows 0.49–0.56), placement time ∝
+/// K · rays (0.46–0.54 against ε), interpolation error ∝ ε^0.3 (occluder
+/// 0.24–0.37, windows 0.24–0.30); at ε 0.025 with 256 rays the two terms were
+/// alike (at ε ≤ 0.0125 more rays began to pay, above it they did not). ε ∝
+/// B^−0.91, rays ∝ B^0.55, error ∝ B^−0.27.
+pub const FLATLAND: ErrorModel = ErrorModel {
+    error_exponent_p: 0.3,
+    count_exponent_q: 0.5,
+    camera: None,
+    rays_at_one: 256.0,
+};
+
+/// ε of a 2D field at budget 1.
 pub const EPS_AT_ONE: f64 = 0.025;
-/// Rays per record at budget 1.
-pub const RAYS_AT_ONE: f64 = 256.0;
-/// The smallest budget (ε ≈ 0.31, 56 rays per record: below, records are noise).
+
+/// 3D images (`volcache render3d --budget`), measured with `volcache render3d` on
+/// `fog_box.json` and `lamp_fog.json` at 24×18 (65,536-spp references, the medium
+/// part's RMSE), seeds 1–2, ε 1, 1/4, 1/16 of the scene's default × 64 / 256 /
+/// 1024 rays × 4 / 16 / 64 camera samples (numbers in the commit): K ∝ ε^−0.52
+/// (lamp_fog 0.43) and ∝ spp^0.13; the time ∝ spp^0.2 (also at 96×72: the
+/// placement visits every camera sample's march points, the image's own share was
+/// 2–8%); the fit E² = A ε^{2p} + C/rays + D/spp gave p ≈ 0.5 and terms alike at
+/// a quarter of the default ε, 256 rays and 16 camera samples (fog_box: 3.0, 2.1,
+/// 3.0 · 10⁻⁵). The camera's cost exponent is rounded up to 0.25: at images large
+/// enough that the image's time rivals the placement's, camera samples cost more
+/// than the model counts. ε ∝ B^−0.57, rays and spp ∝ B^0.57, error ∝ B^−0.29.
+pub const VOLUME: ErrorModel = ErrorModel {
+    error_exponent_p: 0.5,
+    count_exponent_q: 0.5,
+    camera: Some((0.25, 16.0)),
+    rays_at_one: 256.0,
+};
+
+/// ε of a 3D image at budget 1, as a multiple of the scene's default
+/// (`volume::cached::default_eps`).
+pub const VOLUME_EPS_AT_ONE: f64 = 0.25;
+
+/// The smallest budget (2D: ε ≈ 0.31, 56 rays per record: below, records are noise).
 pub const MIN_BUDGET: f64 = 1.0 / 16.0;
-/// The largest budget (ε ≈ 1.3·10^−5, ≈ 23,000 rays per record).
+/// The largest budget (2D: ε ≈ 1.3·10^−5, ≈ 23,000 rays per record).
 pub const MAX_BUDGET: f64 = 4096.0;
 
 /// What a budget sets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Schedule {
-    pub eps: f64,
+    /// ε as a multiple of ε at budget 1.
+    pub eps_scale: f64,
     pub rays: usize,
+    /// Camera samples per pixel (None where the model has none).
+    pub spp: Option<u32>,
 }
 
-/// The schedule of budget `b` (in [`MIN_BUDGET`], [`MAX_BUDGET`]; callers check).
-pub fn schedule(b: f64) -> Schedule {
-    let b = b.clamp(MIN_BUDGET, MAX_BUDGET);
-    let denom = 2.0 * ERROR_EXPONENT_P + COUNT_EXPONENT_Q;
-    let eps = EPS_AT_ONE * b.powf(-1.0 / denom);
-    // At least 56 directions: the budget is clamped.
-    let rays = (RAYS_AT_ONE * b.powf(2.0 * ERROR_EXPONENT_P / denom)).round() as usize;
-    Schedule { eps, rays }
+impl ErrorModel {
+    /// The exponents of ε, rays and camera samples in the budget.
+    fn exponents(&self) -> (f64, f64) {
+        let (p, q) = (self.error_exponent_p, self.count_exponent_q);
+        let s = self.camera.map_or(0.0, |(s, _)| s);
+        // γ / (2p) = 1 / (2p + q + 2p s); with s = 0 the same operations as
+        // 1 / (2p + q).
+        let denom = 2.0 * p + q + 2.0 * p * s;
+        (-1.0 / denom, 2.0 * p / denom)
+    }
+
+    /// The schedule of budget `b` (in [`MIN_BUDGET`], [`MAX_BUDGET`]; callers check).
+    pub fn schedule(&self, b: f64) -> Schedule {
+        let b = b.clamp(MIN_BUDGET, MAX_BUDGET);
+        let (eps_exp, gamma) = self.exponents();
+        let grow = b.powf(gamma);
+        Schedule {
+            eps_scale: b.powf(eps_exp),
+            rays: (self.rays_at_one * grow).round() as usize,
+            spp: self.camera.map(|(_, spp)| (spp * grow).round().max(1.0) as u32),
+        }
+    }
+}
+
+/// The 2D schedule of budget `b`: ε and rays per record.
+pub fn schedule(b: f64) -> (f64, usize) {
+    let s = FLATLAND.schedule(b);
+    (EPS_AT_ONE * s.eps_scale, s.rays)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// The model's cost ε^−q · rays · spp^s, relative to budget 1's.
+    fn model_cost(m: &ErrorModel, s: &Schedule) -> f64 {
+        let camera = match (m.camera, s.spp) {
+            (Some((e, at_one)), Some(spp)) => (spp as f64 / at_one).powf(e),
+            _ => 1.0,
+        };
+        s.eps_scale.powf(-m.count_exponent_q) * s.rays as f64 / m.rays_at_one * camera
+    }
+
     #[test]
     fn budget_one_is_the_reference_point_and_cost_grows_with_the_budget() {
-        let s = schedule(1.0);
-        assert_eq!((s.eps, s.rays), (EPS_AT_ONE, RAYS_AT_ONE as usize));
-        // The model's cost K · rays ∝ ε^−q · rays grows as the budget (rays rounded).
-        for b in [MIN_BUDGET, 0.25, 4.0, 16.0, MAX_BUDGET] {
-            let s = schedule(b);
-            let cost = (s.eps / EPS_AT_ONE).powf(-COUNT_EXPONENT_Q) * s.rays as f64 / RAYS_AT_ONE;
-            assert!((cost / b - 1.0).abs() < 0.02, "budget {b}: model cost {cost}");
+        assert_eq!(schedule(1.0), (EPS_AT_ONE, FLATLAND.rays_at_one as usize));
+        let v = VOLUME.schedule(1.0);
+        assert_eq!((v.eps_scale, v.rays), (1.0, VOLUME.rays_at_one as usize));
+        assert_eq!(v.spp.map(f64::from), VOLUME.camera.map(|c| c.1));
+        // The cost grows as the budget (rays and camera samples rounded).
+        for m in [FLATLAND, VOLUME] {
+            for b in [0.25, 4.0, 16.0, MAX_BUDGET] {
+                let cost = model_cost(&m, &m.schedule(b));
+                assert!((cost / b - 1.0).abs() < 0.05, "{m:?} budget {b}: model cost {cost}");
+            }
         }
+    }
+
+    /// Every error term falls alike: ε^{2p}, 1/rays and 1/spp by one factor.
+    #[test]
+    fn the_terms_fall_alike() {
+        let (a, b) = (VOLUME.schedule(1.0), VOLUME.schedule(64.0));
+        let interp = (b.eps_scale / a.eps_scale).powf(2.0 * VOLUME.error_exponent_p);
+        let rays = a.rays as f64 / b.rays as f64;
+        let spp = a.spp.unwrap() as f64 / b.spp.unwrap() as f64;
+        assert!(
+            (interp / rays - 1.0).abs() < 0.01 && (spp / rays - 1.0).abs() < 0.05,
+            "{interp} {rays} {spp}"
+        );
     }
 
     #[test]
     fn the_schedule_is_monotone() {
-        let mut last = schedule(MIN_BUDGET);
-        for k in 1..=32 {
-            let s = schedule(MIN_BUDGET * 2f64.powf(k as f64 * 0.5));
-            assert!(s.eps < last.eps && s.rays >= last.rays, "{s:?} after {last:?}");
-            last = s;
+        for m in [FLATLAND, VOLUME] {
+            let mut last = m.schedule(MIN_BUDGET);
+            for k in 1..=32 {
+                let s = m.schedule(MIN_BUDGET * 2f64.powf(k as f64 * 0.5));
+                assert!(
+                    s.eps_scale < last.eps_scale && s.rays >= last.rays && s.spp >= last.spp,
+                    "{s:?} after {last:?}"
+                );
+                last = s;
+            }
         }
     }
 }

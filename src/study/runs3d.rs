@@ -36,6 +36,14 @@ pub struct Run3d {
     pub surface_records: usize,
     pub eps: Option<f64>,
     pub spp: u32,
+    /// The budget that set ε, the directions and the camera samples (ours), or
+    /// whose record count, directions and camera samples this run shares
+    /// (jarosz08), in a budget sweep.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub budget: Option<f64>,
+    /// Directions per record (cache methods).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rays_per_record: Option<usize>,
     pub seconds: f64,
     pub placement_seconds: f64,
     pub reconstruction_seconds: f64,
@@ -57,6 +65,8 @@ impl Run3d {
             surface_records: 0,
             eps: None,
             spp: image.spp,
+            budget: None,
+            rays_per_record: None,
             seconds: image.seconds,
             placement_seconds: 0.0,
             reconstruction_seconds: image.seconds,
@@ -93,6 +103,7 @@ pub fn cache_run(
     let mut run = Run3d::rendered(method_name(cs.method), r.reconstruction.image, reference);
     run.records = placement.record_count();
     run.eps = Some(placement.eps);
+    run.rays_per_record = Some(cs.probe.rays);
     run.placement_seconds = placement.seconds;
     run.rays += placement.rays;
     if let Some(s) = &surfaces {

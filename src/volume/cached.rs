@@ -46,6 +46,15 @@ pub fn default_eps(method: CacheMethod, scene: &Scene) -> f64 {
     }
 }
 
+/// What budget `b` (`pipeline::budget::VOLUME`) sets for ours on `scene`:
+/// (ε, rays per record, camera samples per pixel).
+pub fn budget_settings(scene: &Scene, b: f64) -> (f64, usize, u32) {
+    use crate::pipeline::budget::{VOLUME, VOLUME_EPS_AT_ONE};
+    let s = VOLUME.schedule(b);
+    let eps = default_eps(CacheMethod::Ours, scene) * VOLUME_EPS_AT_ONE * s.eps_scale;
+    (eps, s.rays, s.spp.unwrap_or(1))
+}
+
 /// Every march point of every camera sample of the window's pixels, pixel by
 /// pixel in a coarse-to-fine order; L_s leaves each towards the camera.
 struct CameraSamples<'a> {
