@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Regenerates the 3D results under results/: the error-vs-time sweep of ours,
-# jarosz08 and path tracing on the staircase (results/tradeoff3d_staircase.*) and the
+# jarosz08 and path tracing on the staircase over record counts
+# (results/tradeoff3d_staircase.*) and over budgets (results/tradeoff3d_budget/), and the
 # equal-count / equal-time comparison figures (results/compare3d/). The converged
 # references are kept in out/reference_cache3d/ and reused by later runs.
-# Takes about an hour on 2 cores (the 8192-spp references are a third of it).
+# Takes about an hour and a half on 2 cores (the 8192-spp references are a fifth of it).
 # The sweep stops at 400 records: Jarosz 2008's equal-count searches at 800 and
 # 1600 took ~20 and ~40 minutes more (its count jumps with ε, so the search probes
 # many ε); the README quotes ours at 800 and 1600 from a run with those counts.
@@ -16,3 +17,7 @@ $V bench tradeoff3d scenes3d/staircase.json --res 160x120 "${COMMON[@]}" \
     --counts 25,50,100,200,400 --spps 4,16,64,256,1024 --out results
 $V figure compare3d scenes3d/staircase.json --res 160x120 "${COMMON[@]}" --caches 800 --out results/compare3d
 $V figure compare3d scenes3d/fog_box.json --res 128x128 "${COMMON[@]}" --caches 400 --out results/compare3d
+# One budget (ours: ε, directions and camera samples from pipeline::budget::VOLUME;
+# jarosz08 at ours' record counts), against the same 8192-spp reference.
+$V bench tradeoff3d scenes3d/staircase.json --res 160x120 --ref-spp 8192 \
+    --budgets 0.25,1,4 --spps 4,16,64,256,1024 --out results/tradeoff3d_budget

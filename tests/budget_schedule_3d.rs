@@ -179,8 +179,8 @@ fn render3d_takes_a_budget() {
         (vec!["--budget", "2", "--rays", "64"], "cannot be used with"),
         (vec!["--budget", "2", "--time-budget", "5"], "cannot be used with"),
         (vec!["--budget", "2", "--records-in", "r.json"], "cannot be used with"),
-        (vec!["--budget", "2", "--method", "jarosz08"], "with --method jarosz08"),
-        (vec!["--budget", "2", "--method", "pt"], "with --method pt"),
+        (vec!["--budget", "2", "--method", "jarosz08"], "not --method jarosz08"),
+        (vec!["--budget", "2", "--method", "pt"], "not --method pt"),
     ] {
         let mut args = args;
         if !args.contains(&"--method") {

@@ -183,7 +183,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         check_range("--budget", b, (MIN_BUDGET, MAX_BUDGET))?;
         anyhow::ensure!(
             a.method == Method::Ours,
-            "--budget schedules ours (its error model was measured for ours): with --method {}, give --spp (and --eps or --caches)",
+            "--budget schedules ours (its error model was measured for ours), not --method {}: give --spp (and --eps or --caches)",
             a.method.name()
         );
         let (eps, rays, spp) = budget_settings(&scene, b);
