@@ -178,7 +178,7 @@ fn surface_form_factor<S: Dim>(lf: &LightField<S>, e: &Element<S>) -> Taylor2<S>
         .expect("a simplex has vertices");
     let near = v.iter().map(|&p| S::length(p - lf.x)).fold(f64::INFINITY, f64::min);
     let h = 1e-4 * near;
-    let [ff] = Taylor2::central_differences(
+    let [ff] = Taylor2::central_differences_compact(
         |xp| {
             let moved = S::simplex(|i| {
                 if i == k {

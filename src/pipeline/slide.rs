@@ -83,7 +83,7 @@ pub fn vertex_rule<S: Dim>(
                 let sigma = lf.sigma_t.max_element();
                 let scale = (d * (1.0 - lf.g.abs()).max(1e-3)).min(d / (sigma * r_y).max(1e-12));
                 let h = 1e-3 * scale;
-                Taylor2::central_differences(
+                Taylor2::central_differences_compact(
                     |xp| match slid::<S>(xp, q, p, n) {
                         Some(yp) => phase_transmittance_at(lf, xp, yp, phase),
                         None => phase_transmittance_at(lf, xp, y, phase),
@@ -140,7 +140,7 @@ pub fn transmittance_mean<S: Dim>(lf: &LightField<S>, a: S::Vec, b: S::Vec) -> [
     let x = lf.x;
     let r = S::length(a - x).min(S::length(b - x));
     let h = 1e-3 * r.min(1.0 / lf.sigma_t.max_element().max(1e-12));
-    Taylor2::central_differences(mean, x, h)
+    Taylor2::central_differences_compact(mean, x, h)
 }
 
 /// The mean of f·T (the angular factor times the transmittance) over a triangle
@@ -180,7 +180,7 @@ pub fn mean_over_directions<S: Dim>(lf: &LightField<S>, v: &[S::Vec]) -> [Taylor
     };
     let r = v.iter().map(|&q| S::length(q - x)).fold(f64::INFINITY, f64::min);
     let h = 1e-3 * r.min(1.0 / lf.sigma_t.max_element().max(1e-12));
-    Taylor2::central_differences(mean, x, h)
+    Taylor2::central_differences_compact(mean, x, h)
 }
 
 /// Whether the phase's lobe is wide against element `v` seen from x, so that
