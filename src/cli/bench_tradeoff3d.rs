@@ -106,36 +106,29 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
                 .iter()
                 .filter_map(|&b| {
                     let (eps, rays, spp) = budget_settings(scene, b);
-                    let image = RenderParams { spp, ..image.clone() };
-                    let cache = Cache3dArgs {
-                        rays,
-                        ..a.cache.clone()
-                    };
-                    match method {
-                        CacheMethod::Ours => {
-                            let cache = Cache3dArgs {
-                                eps: Some(eps),
-                                ..cache
-                            };
-                            let point = CachePoint {
-                                cache,
-                                image,
-                                target: None,
-                            };
-                            Some((format!("budget {b}"), point, Some(b)))
-                        }
-                        // Jarosz 2008 (whose ε means something else) at ours' count.
+                    // Ours at the budget's ε; Jarosz 2008 (whose ε means something
+                    // else) at ours' count.
+                    let (eps, target) = match method {
+                        CacheMethod::Ours => (Some(eps), None),
                         CacheMethod::Jarosz08 => {
                             let ours = runs.iter().find(|r| r.method == "ours" && r.budget == Some(b))?;
-                            let label = format!("budget {b} (at {} records)", ours.records);
-                            let point = CachePoint {
-                                cache,
-                                image,
-                                target: Some(ours.records),
-                            };
-                            Some((label, point, Some(b)))
+                            (None, Some(ours.records))
                         }
-                    }
+                    };
+                    let label = match target {
+                        Some(k) => format!("budget {b} (at {k} records)"),
+                        None => format!("budget {b}"),
+                    };
+                    let point = CachePoint {
+                        cache: Cache3dArgs {
+                            eps,
+                            rays,
+                            ..a.cache.clone()
+                        },
+                        image: RenderParams { spp, ..image.clone() },
+                        target,
+                    };
+                    Some((label, point, Some(b)))
                 })
                 .collect(),
         };

@@ -198,8 +198,8 @@ mod tests {
     }
 
     /// The compact stencil is exact for a quadratic too, and on a smooth
-    /// non-polynomial function (a Gaussian times a cosine, 3D and 2D) agrees with
-    /// the four-point rule and the closed form to O(h²).
+    /// non-polynomial function (a Gaussian times a cosine, 3D) agrees with the
+    /// four-point rule and the closed form to O(h²).
     #[test]
     fn compact_central_differences_agree() {
         use crate::core::space::D3;
@@ -213,8 +213,8 @@ mod tests {
             "{:?}",
             q.hess
         );
-        // f = exp(−|x|²) cos(x·k): H = f·(4xxᵀ − 2I) + ... compared with Taylor2's
-        // own arithmetic (exact derivatives).
+        // f = exp(−|x|²) cos(x·k), against Taylor2's own arithmetic (exact
+        // derivatives).
         let k = DVec3::new(1.3, -0.4, 0.7);
         let f = |x: DVec3| [(-x.length_squared()).exp() * x.dot(k).cos()];
         let exact = {
