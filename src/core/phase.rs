@@ -15,7 +15,7 @@
 //! μ = −ω_j · ω_o; [`phase_taylor`] returns it with its gradient and Hessian in x,
 //! using the 2D HG for `D2` and the 3D HG for `D3` ([`hg_of_mu`]).
 
-use super::distance::{Offset, direction_along, direction_along_from};
+use super::distance::{Offset, direction_along, direction_along_from, directions_dot};
 use super::space::Space;
 use super::taylor::Taylor2;
 use glam::{DVec2, DVec3};
@@ -101,12 +101,7 @@ pub fn phase_taylor_out<S: Space>(g: f64, x: S::Vec, c: S::Vec, out: Outgoing<S:
         }
         Outgoing::TowardsPoint(e) => {
             let oe = Offset::<S>::new(x, e, 0.0);
-            let mut dot = Taylor2::<S>::zero();
-            for k in 0..S::DIM {
-                let a = S::axis(k);
-                dot += direction_along_from(&o, a) * direction_along_from(&oe, a);
-            }
-            (-dot, oe.u, oe.soft_ratio2)
+            (-directions_dot(&o, &oe), oe.u, oe.soft_ratio2)
         }
     };
     // 1 ∓ μ from |u ± w|² and 1 − |u|² = ε²/r², so D never cancels.

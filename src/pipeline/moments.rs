@@ -68,15 +68,20 @@ impl<S: Dim> LightField<S> {
 
     /// The angular factor's value for light from `y` received at `x`.
     pub fn angular_at(&self, x: S::Vec, y: S::Vec) -> f64 {
-        let u = unit::<S>(y - x);
-        match self.angular {
-            Angular::Phase => {
-                let w = match self.outgoing() {
-                    super::probe::Outgoing::Direction(w) => unit::<S>(w),
-                    super::probe::Outgoing::TowardsPoint(eye) => unit::<S>(eye - x),
-                };
-                hg_of_mu::<S>(self.g, -S::dot(u, w)).0
-            }
+        self.angular_from(x)(unit::<S>(y - x))
+    }
+
+    /// [`Self::angular_at`] for many directions u (unit, from x towards where the
+    /// light comes from) at one x: the outgoing direction at x (towards a camera, a
+    /// square root) is found once, and a caller that knows u spares its own.
+    pub fn angular_from(&self, x: S::Vec) -> impl Fn(S::Vec) -> f64 + '_ {
+        let w = match (self.angular, self.outgoing()) {
+            (Angular::Phase, super::probe::Outgoing::Direction(w)) => unit::<S>(w),
+            (Angular::Phase, super::probe::Outgoing::TowardsPoint(eye)) => unit::<S>(eye - x),
+            _ => S::zero(),
+        };
+        move |u| match self.angular {
+            Angular::Phase => hg_of_mu::<S>(self.g, -S::dot(u, w)).0,
             Angular::Moment(k) => basis_at::<S>(k, -u),
             Angular::Cosine(n) => S::dot(n, u).max(0.0),
         }

@@ -26,7 +26,7 @@ use super::silhouette::BRIDGE_RATIO;
 use crate::core::color::Rgb;
 use crate::core::graded_rule::graded_nodes;
 use crate::core::taylor::Taylor2;
-use crate::core::transmittance::transmittance_taylor_rgb;
+use crate::core::transmittance::{transmittance, transmittance_taylor_rgb};
 
 /// The point of the plane (`p`, `n`) on the line from `x` through `e`, beyond `e`
 /// and not much farther than the plane's point; `None` when the line grazes it.
@@ -41,8 +41,7 @@ fn slid<S: Dim>(x: S::Vec, e: S::Vec, p: S::Vec, n: S::Vec) -> Option<S::Vec> {
 /// f(−ω·ω_o) T(|y − x|) per channel, for light from `y` received at `x` (T alone
 /// without `phase`).
 fn phase_transmittance_at<S: Dim>(lf: &LightField<S>, x: S::Vec, y: S::Vec, phase: bool) -> [f64; 3] {
-    let r = S::length(y - x);
-    let t: Rgb = (-lf.sigma_t * r).exp();
+    let t = transmittance(lf.sigma_t, S::length(y - x));
     if !phase {
         return t.to_array();
     }
@@ -132,7 +131,7 @@ pub fn transmittance_mean<S: Dim>(lf: &LightField<S>, a: S::Vec, b: S::Vec) -> [
             let s = (t / rb) / ((1.0 - t) / ra + t / rb);
             let y = a + (b - a) * s;
             let j = w / S::length_squared(ua * (1.0 - t) + ub * t);
-            sum += (-lf.sigma_t * S::length(y - x)).exp() * j;
+            sum += transmittance(lf.sigma_t, S::length(y - x)) * j;
             norm += j;
         }
         (sum / norm).to_array()
@@ -161,6 +160,7 @@ pub fn mean_over_directions<S: Dim>(lf: &LightField<S>, v: &[S::Vec]) -> [Taylor
     let mean = |x: S::Vec| {
         let r: [f64; 3] = std::array::from_fn(|k| S::length(v[k] - x));
         let u: [S::Vec; 3] = std::array::from_fn(|k| (v[k] - x) / r[k]);
+        let angular = lf.angular_from(x);
         let (mut sum, mut norm) = ([0.0; 3], 0.0);
         for &(b, w) in &nodes {
             // The direction (Σ b_k u_k) meets the element's plane at
@@ -168,11 +168,12 @@ pub fn mean_over_directions<S: Dim>(lf: &LightField<S>, v: &[S::Vec]) -> [Taylor
             // vectors projected onto the sphere).
             let p = u[0] * b[0] + u[1] * b[1] + u[2] * b[2];
             let len = S::length(p);
-            let y = x + p / (b[0] / r[0] + b[1] / r[1] + b[2] / r[2]);
+            // (y − x = p / s: its length and direction from p's.)
+            let s = b[0] / r[0] + b[1] / r[1] + b[2] / r[2];
             let j = w / (len * len * len);
-            let ft = phase_transmittance_at(lf, x, y, true);
+            let (f, t) = (angular(p / len), transmittance(lf.sigma_t, len / s));
             for c in 0..3 {
-                sum[c] += ft[c] * j;
+                sum[c] += f * t[c] * j;
             }
             norm += j;
         }
