@@ -32,10 +32,10 @@
 //! reference can tell (g 0, 0.6, 0.99 along ω_o and towards an eye, g −0.9).
 
 use super::graded_rule::{GAUSS5, graded_nodes};
-use super::phase::{Outgoing, phase_taylor_out};
+use super::phase::{Outgoing, phase_taylor_out, phase_value_out};
 use super::space::D3;
 use super::taylor::Taylor2;
-use super::transmittance::transmittance_taylor;
+use super::transmittance::{transmittance, transmittance_taylor};
 use super::triangle::signed_solid_angle;
 use glam::{DMat3, DVec3};
 
@@ -64,6 +64,11 @@ impl Lobe {
     fn integrand(&self, n: DVec3, y: DVec3, x: DVec3) -> [Taylor2<D3>; 3] {
         let base =
             phase_taylor_out::<D3>(self.g, x, y, Outgoing::Direction(self.out), 0.0) * solid_angle_density(n, y, x);
+        let [r, g, b] = self.sigma_t;
+        if r == g && g == b {
+            // Grey media (the common case): one transmittance for the three.
+            return [base * transmittance_taylor::<D3>(r, x, y, 0.0); 3];
+        }
         self.sigma_t.map(|st| base * transmittance_taylor::<D3>(st, x, y, 0.0))
     }
 }
@@ -160,9 +165,10 @@ fn moments(lobe: &Lobe, pieces: &[[DVec3; 3]], n: DVec3, x: DVec3) -> [[f64; 3];
             let y = x + p / (b[0] / r[0] + b[1] / r[1] + b[2] / r[2]);
             let j = w / (len * len * len);
             let rho = (y - x).length() / n.dot(y - x);
-            let f = phase_taylor_out::<D3>(lobe.g, x, y, Outgoing::Direction(lobe.out), 0.0).value;
-            for (m, st) in mean.iter_mut().zip(lobe.sigma_t) {
-                let ft = f * (-st.max(0.0) * (y - x).length()).exp() * j;
+            let f = phase_value_out::<D3>(lobe.g, x, y, Outgoing::Direction(lobe.out), 0.0);
+            let t = transmittance(DVec3::from(lobe.sigma_t).max(DVec3::ZERO), (y - x).length());
+            for (m, t) in mean.iter_mut().zip(t.to_array()) {
+                let ft = f * t * j;
                 m[0] += ft;
                 m[1] += ft * rho;
                 m[2] += ft * rho * rho;

@@ -92,29 +92,59 @@ pub fn phase_taylor_out<S: Space>(g: f64, x: S::Vec, c: S::Vec, out: Outgoing<S:
     }
     let g = g.clamp(-G_MAX, G_MAX);
     let o = Offset::<S>::new(x, c, soft);
-    // μ = −u·w, and w's own softening ratio (zero for a fixed unit direction).
-    let (mu, w, w_soft2) = match out {
+    let (w, oe) = outgoing_at(x, out);
+    // μ = −u·w.
+    let mu = match &oe {
+        None => -direction_along_from(&o, w.u),
+        Some(oe) => -directions_dot(&o, oe),
+    };
+    let (f, df, d2f) = hg_of_den::<S>(g, phase_den::<S>(g, &o, &w));
+    mu.compose(f, df, d2f)
+}
+
+/// The value of [`phase_taylor_out`] alone (the same floating-point operations),
+/// for rules that differentiate otherwise or not at all.
+pub fn phase_value_out<S: Space>(g: f64, x: S::Vec, c: S::Vec, out: Outgoing<S::Vec>, soft: f64) -> f64 {
+    if g == 0.0 {
+        return 1.0 / S::SPHERE_MEASURE;
+    }
+    let g = g.clamp(-G_MAX, G_MAX);
+    let (w, _) = outgoing_at(x, out);
+    hg_of_den::<S>(g, phase_den::<S>(g, &Offset::new(x, c, soft), &w)).0
+}
+
+/// ω_o at x as a unit direction with its softening ratio (zero for a fixed
+/// direction), and towards a point, the offset it comes from.
+fn outgoing_at<S: Space>(x: S::Vec, out: Outgoing<S::Vec>) -> (Offset<S>, Option<Offset<S>>) {
+    match out {
         Outgoing::Direction(w_o) => {
             let len = S::length(w_o);
-            let w = if len > 0.0 { w_o / len } else { S::axis(0) };
-            (-direction_along_from(&o, w), w, 0.0)
+            let u = if len > 0.0 { w_o / len } else { S::axis(0) };
+            let w = Offset {
+                r: 1.0,
+                u,
+                soft_ratio2: 0.0,
+            };
+            (w, None)
         }
         Outgoing::TowardsPoint(e) => {
             let oe = Offset::<S>::new(x, e, 0.0);
-            (-directions_dot(&o, &oe), oe.u, oe.soft_ratio2)
+            (oe, Some(oe))
         }
-    };
-    // 1 ∓ μ from |u ± w|² and 1 − |u|² = ε²/r², so D never cancels.
-    let soft2 = o.soft_ratio2 + w_soft2;
-    let den = if g >= 0.0 {
-        let one_minus_mu = 0.5 * (S::length_squared(o.u + w) + soft2);
+    }
+}
+
+/// 1 + g² − 2gμ with μ = −u·w for the softened directions of `o` and `w`: 1 ∓ μ
+/// from |u ± w|² and 1 − |u|² = ε²/r², so it never cancels.
+fn phase_den<S: Space>(g: f64, o: &Offset<S>, w: &Offset<S>) -> f64 {
+    let soft2 = o.soft_ratio2 + w.soft_ratio2;
+    if g >= 0.0 {
+        let one_minus_mu = 0.5 * (S::length_squared(o.u + w.u) + soft2);
         (1.0 - g) * (1.0 - g) + 2.0 * g * one_minus_mu
     } else {
-        let one_plus_mu = 0.5 * (S::length_squared(o.u - w) + soft2);
+        let one_plus_mu = 0.5 * (S::length_squared(o.u - w.u) + soft2);
         (1.0 + g) * (1.0 + g) - 2.0 * g * one_plus_mu
-    };
-    let (f, df, d2f) = hg_of_den::<S>(g, den);
-    mu.compose(f, df, d2f)
+    }
 }
 
 /// The phase factor f(−ω · ω_o) of light arriving along a *fixed* direction ω
