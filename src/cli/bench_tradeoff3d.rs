@@ -105,11 +105,11 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
             Some(budgets) => budgets
                 .iter()
                 .filter_map(|&b| {
-                    let (eps, rays, spp) = budget_settings(scene, b);
+                    let s = budget_settings(scene, b);
                     // Ours at the budget's ε; Jarosz 2008 (whose ε means something
                     // else) at ours' count.
                     let (eps, target) = match method {
-                        CacheMethod::Ours => (Some(eps), None),
+                        CacheMethod::Ours => (Some(s.eps), None),
                         CacheMethod::Jarosz08 => {
                             let ours = runs.iter().find(|r| r.method == "ours" && r.budget == Some(b))?;
                             (None, Some(ours.records))
@@ -120,12 +120,17 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
                         None => format!("budget {b}"),
                     };
                     let point = CachePoint {
+                        // (Both methods with the budget's straight-light samples.)
                         cache: Cache3dArgs {
                             eps,
-                            rays,
+                            rays: s.rays,
+                            direct_samples: a.cache.direct_samples.or(Some(s.direct_samples)),
                             ..a.cache.clone()
                         },
-                        image: RenderParams { spp, ..image.clone() },
+                        image: RenderParams {
+                            spp: s.spp,
+                            ..image.clone()
+                        },
                         target,
                     };
                     Some((label, point, Some(b)))

@@ -92,7 +92,8 @@ pub struct Render3dArgs {
     /// the scene's default, 256 directions per record and 16 camera samples per
     /// pixel; a budget k times larger costs about k times as much, spent where the
     /// measured error model says it pays (ε, directions and camera samples, so that
-    /// their errors fall alike). Sets --eps, --rays and --spp.
+    /// their errors fall alike). Sets --eps, --rays and --spp, and the straight
+    /// light is sampled at every march point (--direct-samples 4 unless given).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays", "records_in"])]
     pub budget: Option<f64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full image (same samples as
@@ -186,8 +187,9 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
             "--budget schedules ours (its error model was measured for ours), not --method {}: give --spp (and --eps or --caches)",
             a.method.name()
         );
-        let (eps, rays, spp) = budget_settings(&scene, b);
-        (cache.eps, cache.rays, params.spp) = (Some(eps), rays, spp);
+        let s = budget_settings(&scene, b);
+        (cache.eps, cache.rays, params.spp) = (Some(s.eps), s.rays, s.spp);
+        cache.direct_samples.get_or_insert(s.direct_samples);
     } else if let Some(s) = a.spp {
         check_spp("--spp", s, limits::MAX_SPP)?;
         params.spp = s;

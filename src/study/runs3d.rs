@@ -44,6 +44,10 @@ pub struct Run3d {
     /// Directions per record (cache methods).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rays_per_record: Option<usize>,
+    /// Samples of the straight light per march point, when the records leave it
+    /// out (cache methods with `CacheSettings::direct_samples`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direct_samples: Option<u32>,
     pub seconds: f64,
     pub placement_seconds: f64,
     pub reconstruction_seconds: f64,
@@ -67,6 +71,7 @@ impl Run3d {
             spp: image.spp,
             budget: None,
             rays_per_record: None,
+            direct_samples: None,
             seconds: image.seconds,
             placement_seconds: 0.0,
             reconstruction_seconds: image.seconds,
@@ -104,6 +109,7 @@ pub fn cache_run(
     run.records = placement.record_count();
     run.eps = Some(placement.eps);
     run.rays_per_record = Some(cs.probe.rays);
+    run.direct_samples = cs.direct_samples;
     run.placement_seconds = placement.seconds;
     run.rays += placement.rays;
     if let Some(s) = &surfaces {

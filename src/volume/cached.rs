@@ -46,13 +46,29 @@ pub fn default_eps(method: CacheMethod, scene: &Scene) -> f64 {
     }
 }
 
-/// What budget `b` (`pipeline::budget::VOLUME`) sets for ours on `scene`:
-/// (ε, rays per record, camera samples per pixel).
-pub fn budget_settings(scene: &Scene, b: f64) -> (f64, usize, u32) {
-    use crate::pipeline::budget::{VOLUME, VOLUME_EPS_AT_ONE};
+/// What a budget sets for ours on a scene (`budget_settings`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BudgetSettings {
+    pub eps: f64,
+    /// Directions per record.
+    pub rays: usize,
+    /// Camera samples per pixel.
+    pub spp: u32,
+    /// Samples of the straight light per march point
+    /// (`pipeline::budget::VOLUME_DIRECT_SAMPLES`).
+    pub direct_samples: u32,
+}
+
+/// What budget `b` (`pipeline::budget::VOLUME`) sets for ours on `scene`.
+pub fn budget_settings(scene: &Scene, b: f64) -> BudgetSettings {
+    use crate::pipeline::budget::{VOLUME, VOLUME_DIRECT_SAMPLES, VOLUME_EPS_AT_ONE};
     let s = VOLUME.schedule(b);
-    let eps = default_eps(CacheMethod::Ours, scene) * VOLUME_EPS_AT_ONE * s.eps_scale;
-    (eps, s.rays, s.spp.unwrap_or(1))
+    BudgetSettings {
+        eps: default_eps(CacheMethod::Ours, scene) * VOLUME_EPS_AT_ONE * s.eps_scale,
+        rays: s.rays,
+        spp: s.spp.unwrap_or(1),
+        direct_samples: VOLUME_DIRECT_SAMPLES,
+    }
 }
 
 /// Every march point of every camera sample of the window's pixels, pixel by
