@@ -17,7 +17,8 @@ $V bench tradeoff3d scenes3d/staircase.json --res 160x120 "${COMMON[@]}" \
     --counts 25,50,100,200,400 --spps 4,16,64,256,1024 --out results
 $V figure compare3d scenes3d/staircase.json --res 160x120 "${COMMON[@]}" --caches 800 --out results/compare3d
 $V figure compare3d scenes3d/fog_box.json --res 128x128 "${COMMON[@]}" --caches 400 --out results/compare3d
-# One budget (ours: ε, directions and camera samples from pipeline::budget::VOLUME;
+# One budget (ours: ε, directions, camera samples and straight-light samples from
+# pipeline::budget (VOLUME, VOLUME_DIRECT_SAMPLES);
 # jarosz08 at ours' record counts), against the same 8192-spp reference.
 $V bench tradeoff3d scenes3d/staircase.json --res 160x120 --ref-spp 8192 \
     --budgets 0.25,1,4 --spps 4,16,64,256,1024 --out results/tradeoff3d_budget
