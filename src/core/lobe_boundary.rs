@@ -35,7 +35,7 @@ use super::graded_rule::{GAUSS5, graded_nodes};
 use super::phase::{Outgoing, phase_taylor_out, phase_value_out};
 use super::space::D3;
 use super::taylor::Taylor2;
-use super::transmittance::{transmittance, transmittance_taylor};
+use super::transmittance::{transmittance, transmittance_taylor_rgb};
 use super::triangle::signed_solid_angle;
 use glam::{DMat3, DVec3};
 
@@ -64,12 +64,8 @@ impl Lobe {
     fn integrand(&self, n: DVec3, y: DVec3, x: DVec3) -> [Taylor2<D3>; 3] {
         let base =
             phase_taylor_out::<D3>(self.g, x, y, Outgoing::Direction(self.out), 0.0) * solid_angle_density(n, y, x);
-        let [r, g, b] = self.sigma_t;
-        if r == g && g == b {
-            // Grey media (the common case): one transmittance for the three.
-            return [base * transmittance_taylor::<D3>(r, x, y, 0.0); 3];
-        }
-        self.sigma_t.map(|st| base * transmittance_taylor::<D3>(st, x, y, 0.0))
+        // (One transmittance for the three channels in grey media.)
+        transmittance_taylor_rgb::<D3>(DVec3::from(self.sigma_t), x, y, 0.0).map(|t| base * t)
     }
 }
 
