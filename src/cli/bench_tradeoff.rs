@@ -121,6 +121,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                         budget: None,
                         caches: Some(ours.run.records),
                         rays: schedule(b).1,
+                        direct_samples: ours.run.direct_samples,
                         ..a.cache.clone()
                     })
                 }

@@ -10,7 +10,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use volcache::figure::{FieldStyle, field_figure};
-use volcache::flatland::cached_field::{CacheMethod, CacheSettings};
+use volcache::flatland::cached_field::{CacheMethod, CacheSettings, budget_settings};
 use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::scene::Scene;
 use volcache::limits;
@@ -35,7 +35,10 @@ pub struct CacheArgs {
     /// One budget for the cache (`pipeline::budget`): B = 1 is ε 0.025 with 256
     /// directions per record; a budget k times larger costs about k times as much,
     /// spent on smaller ε and more directions as the measured error model says.
-    /// Sets --eps and --rays; for ours only (the model was measured for ours).
+    /// Sets --eps and --rays, and where the scene has emitting segments the
+    /// straight light's samples per pixel (a quarter of the placement's rays per
+    /// pixel at B = 1, that share falling as 1/√B; --direct-samples overrides);
+    /// for ours only (the model was measured for ours).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays"])]
     pub budget: Option<f64>,
     /// Directions per cache point.
@@ -125,6 +128,18 @@ impl CacheArgs {
     pub fn rays_per_record(&self) -> usize {
         self.eps_and_rays().1
     }
+
+    /// The straight light's samples per pixel and their share of the placement's
+    /// rays: `--direct-samples` (no share), or under `--budget` the budget's where
+    /// the scene has lights with an extent (delta lights' straight light is per
+    /// pixel anyway: samples of it would repeat it).
+    pub fn direct_for(&self, scene: &Scene) -> (Option<u32>, Option<f64>) {
+        match (self.direct_samples, self.budget) {
+            (Some(n), _) => (Some(n), None),
+            (None, Some(b)) => budget_settings(scene, b).direct.unzip(),
+            (None, None) => (None, None),
+        }
+    }
 }
 
 pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
@@ -138,14 +153,14 @@ pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
     fp
 }
 
-/// The options' cache settings (`fp.seed` is `--seed`, see [`field_params`]).
-pub fn cache_settings(method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
+/// The options' cache settings on `scene` (`fp.seed` is `--seed`, see [`field_params`]).
+pub fn cache_settings(scene: &Scene, method: CacheMethod, a: &CacheArgs, fp: &FieldParams) -> CacheSettings {
     let (eps, rays) = a.eps_and_rays();
     let mut cs = field_runs::cache_settings(method, eps, fp, rays, a.steps);
     cs.probe.grading = a.grading;
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
-    cs.direct_samples = a.direct_samples;
+    (cs.direct_samples, cs.direct_share) = a.direct_for(scene);
     cs.edge_reach = a.edge_reach;
     cs.probe.phase_roulette = a.phase_roulette;
     cs.record_noise = a.record_noise.target();
@@ -164,7 +179,14 @@ pub fn run_method(
     progress: &Progress,
 ) -> Result<MethodRun, CountError> {
     match method.cache_method() {
-        Some(m) => cache_run(scene, fp, &cache_settings(m, a, fp), a.caches, reference, progress),
+        Some(m) => cache_run(
+            scene,
+            fp,
+            &cache_settings(scene, m, a, fp),
+            a.caches,
+            reference,
+            progress,
+        ),
         None => Ok(pt_run(scene, fp, spp, reference, progress)?),
     }
 }
@@ -289,7 +311,7 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         rays_per_cache: a.cache.rays_per_record(),
         budget: a.cache.budget,
         per_part: a.cache.per_part,
-        direct_samples: a.cache.direct_samples,
+        direct_samples: run.direct_samples,
         edge_reach: a.cache.edge_reach,
         second_order: a.cache.second_order,
         run: &run,

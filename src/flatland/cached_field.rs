@@ -18,6 +18,7 @@ use crate::core::color::Rgb;
 pub use crate::core::metric::CacheMethod;
 use crate::core::rng::Sampler;
 use crate::core::space::D2;
+use crate::pipeline::budget::shared_direct_samples;
 use crate::pipeline::path::direct_mean;
 use crate::pipeline::placement::{
     CountError, Placement, QueryPoint, QuerySource, interpolate, place, place_with_count,
@@ -31,6 +32,33 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 pub use crate::pipeline::record::CacheSettings;
+
+/// What a budget sets for ours on a scene (`budget_settings`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BudgetSettings {
+    pub eps: f64,
+    /// Directions per record.
+    pub rays: usize,
+    /// Where the scene has lights with an extent: the straight light's least
+    /// samples per pixel and its share of the placement's rays
+    /// (`CacheSettings::direct_samples`, `CacheSettings::direct_share`).
+    pub direct: Option<(u32, f64)>,
+}
+
+/// What budget `b` (`pipeline::budget::FLATLAND`) sets for ours on `scene`: ε and
+/// directions, and the straight light's samples where the scene has emitting
+/// segments (a delta light's straight light is per pixel at every budget: samples
+/// of it would repeat it).
+pub fn budget_settings(scene: &Scene, b: f64) -> BudgetSettings {
+    use crate::pipeline::budget::{FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share, schedule};
+    let (eps, rays) = schedule(b);
+    let extended_lights = !scene.emitters.prims.is_empty();
+    BudgetSettings {
+        eps,
+        rays,
+        direct: extended_lights.then(|| (FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share(b))),
+    }
+}
 
 /// One record of the distribution figure.
 pub type RecordInfo = crate::pipeline::record::RecordInfo<D2>;
@@ -53,6 +81,8 @@ pub struct CachedField {
     pub reconstruction_rays: u64,
     /// Valid pixels no record covered (placement guarantees zero).
     pub uncovered_pixels: usize,
+    /// Samples per pixel of the straight light, where the records left it out.
+    pub direct_samples: Option<u32>,
 }
 
 impl CachedField {
@@ -121,10 +151,18 @@ pub fn render_cached(
         omega_o: DVec2::from_angle(fp.omega_o_deg.to_radians()),
     };
     let cached = cached_parts(cs, fp.part);
-    let placement = match target {
+    let mut placement = match target {
         Some(n) => place_with_count(scene, &source, cs, cached, n, memo, progress)?,
         None => place(scene, &source, cs, cached, memo, progress)?,
     };
+    // The straight light's samples as a share of what the records cost per pixel.
+    if let (Some(min), Some(share)) = (placement.direct_samples, cs.direct_share) {
+        let points = (0..fp.height)
+            .flat_map(|j| (0..fp.width).map(move |i| (i, j)))
+            .filter(|&(i, j)| scene.medium_at(field.pixel_center(i, j)).is_some())
+            .count();
+        placement.direct_samples = Some(shared_direct_samples(min, share, placement.rays, points));
+    }
     Ok(reconstruct(scene, fp, cs, field, placement))
 }
 
@@ -198,5 +236,6 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
         placement_rays: p.rays,
         reconstruction_rays,
         uncovered_pixels,
+        direct_samples: p.direct_samples,
     }
 }

@@ -50,6 +50,56 @@ pub const FLATLAND: ErrorModel = ErrorModel {
 /// ε of a 2D field at budget 1.
 pub const EPS_AT_ONE: f64 = 0.025;
 
+/// The light arriving straight from lights with an extent (emitting segments) in
+/// a 2D field under a budget: sampled at every pixel (`CacheSettings::
+/// direct_samples`; the records then hold only scattered and reflected light),
+/// at least this many samples, raised to a share of the placement's rays
+/// ([`flatland_direct_share`]). Delta lights need none: their straight light is
+/// per pixel at every budget.
+///
+/// Why per pixel: the straight light of an emitter seen past an occluder's end
+/// has a shadow edge no record's Taylor expansion follows, and records that hold
+/// it are placed for it. `occluder.json` at 128² (16,384-spp reference, seed 1),
+/// budgets ¼ / 1 / 4 / 16: cached 0.047 / 0.037 / 0.036 / 0.025, with 16 samples
+/// per pixel 0.019 / 0.017 / 0.012 / 0.0075 in about the same time (fewer
+/// records: 38 → 32 at budget 1, 123 → 89 at 16); `forest.json` at 160×120:
+/// 3.6 / 2.9 / 2.5 / 1.8 · 10⁻³ → 2.0 / 1.6 / 1.2 / 0.97 · 10⁻³ with 64 samples.
+pub const FLATLAND_DIRECT_MIN_SAMPLES: u32 = 4;
+
+/// The share of a 2D placement's rays per pixel spent on the straight light's
+/// samples at budget 1, and its exponent in the budget.
+///
+/// How many samples: they are one stratified set, whose squared error fell as
+/// n^−1.8 … n^−2 (occluder at budget 16: 8.6·10⁻⁵, 5.4·10⁻⁶, 2.2·10⁻⁷ at 4, 16,
+/// 64 samples; forest at budget 1: 1.8, 0.54, 0.15, 0.03 · 10⁻⁶ at 16 … 128).
+/// Equal marginal gains (the records' squared error ∝ T_p^−γ, γ = 2p/(2p+q) of
+/// [`FLATLAND`]; the samples' cost ∝ n) put n³ ∝ (D/E_p)·(T_p/c): n grows with the
+/// records' cost per pixel, and with the budget as T_p^{(1+γ)/3} ≈ B^0.5 — a
+/// share of the placement's rays falling as B^−0.5. At budget 1 the optimum was
+/// 10–14 samples on the occluder (110 placement rays per pixel) and 80–100 on
+/// the forest (876): a quarter of the placement's rays (14 and 110 samples).
+pub const FLATLAND_DIRECT_SHARE_AT_ONE: f64 = 0.25;
+/// The exponent of the straight light's share of the rays in a 2D budget.
+pub const FLATLAND_DIRECT_SHARE_EXPONENT: f64 = -0.5;
+
+/// The straight light's share of the placement's rays in a 2D field at budget `b`.
+pub fn flatland_direct_share(b: f64) -> f64 {
+    let b = b.clamp(MIN_BUDGET, MAX_BUDGET);
+    FLATLAND_DIRECT_SHARE_AT_ONE * b.powf(FLATLAND_DIRECT_SHARE_EXPONENT)
+}
+
+/// Samples per point of the straight light: `share` of the placement's `rays` per
+/// point served (two rays a sample), at least `min`, at most 2^16.
+pub fn shared_direct_samples(min: u32, share: f64, rays: u64, points: usize) -> u32 {
+    let per_point = rays as f64 / points.max(1) as f64;
+    let n = (share * per_point / 2.0).round();
+    if n.is_finite() {
+        (n as u32).min(1 << 16).max(min)
+    } else {
+        min
+    }
+}
+
 /// 3D images (`volcache render3d --budget`), measured with `volcache render3d` on
 /// `fog_box.json` and `lamp_fog.json` at 24×18 (65,536-spp references, the medium
 /// part's RMSE), seeds 1–2, ε 1, 1/4, 1/16 of the scene's default × 64 / 256 /
@@ -158,6 +208,25 @@ mod tests {
                 assert!((cost / b - 1.0).abs() < 0.05, "{m:?} budget {b}: model cost {cost}");
             }
         }
+    }
+
+    /// The straight light's share of a 2D placement's rays: a quarter at budget 1,
+    /// falling as the budget's marginal-gain rule says (n ∝ T^{(1+γ)/3},
+    /// γ = 2p/(2p+q): the share ∝ T^{(1+γ)/3 − 1}); the samples it gives.
+    #[test]
+    fn the_straight_light_share_falls_as_the_square_root_of_the_budget() {
+        let (p, q) = (FLATLAND.error_exponent_p, FLATLAND.count_exponent_q);
+        let gamma = 2.0 * p / (2.0 * p + q);
+        assert!((FLATLAND_DIRECT_SHARE_EXPONENT - ((1.0 + gamma) / 3.0 - 1.0)).abs() < 0.05);
+        assert_eq!(flatland_direct_share(1.0), 0.25);
+        assert_eq!(flatland_direct_share(16.0), 0.0625);
+        assert_eq!(flatland_direct_share(1e9), flatland_direct_share(MAX_BUDGET));
+        // 110 rays per point at a quarter: 14 samples; the floor; no points; huge.
+        assert_eq!(shared_direct_samples(4, 0.25, 110 * 100, 100), 14);
+        assert_eq!(shared_direct_samples(4, 0.25, 10 * 100, 100), 4);
+        assert_eq!(shared_direct_samples(4, 0.25, 1000, 0), 125);
+        assert_eq!(shared_direct_samples(4, 0.25, u64::MAX, 1), 1 << 16);
+        assert_eq!(shared_direct_samples(4, f64::NAN, 1000, 1), 4);
     }
 
     /// Every error term falls alike: ε^{2p}, 1/rays and 1/spp by one factor.

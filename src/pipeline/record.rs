@@ -61,6 +61,14 @@ pub struct CacheSettings {
     /// lights per point).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub direct_samples: Option<u32>,
+    /// With [`Self::direct_samples`], in 2D fields (`flatland::cached_field`; 3D
+    /// images sample per march point and ignore it): raise the straight light's
+    /// samples per point to this share of the placement's rays per point served
+    /// (two rays a sample), so that a scene whose records are dense, and costly
+    /// per pixel, samples its straight light in proportion. Set by a 2D budget
+    /// (`super::budget::flatland_direct_share`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direct_share: Option<f64>,
     /// Limit every radius of a record to this multiple of the distance from it to
     /// the nearest surface edge it sees (a segment's end, a triangle's silhouette
     /// edge; [`RecordData::nearest_edge`]). Around an edge the light turns with the
@@ -116,6 +124,7 @@ impl CacheSettings {
             seed: 1,
             moment_bands: None,
             direct_samples: None,
+            direct_share: None,
             edge_reach: None,
             shrink_noisy_gradients: true,
             record_noise: None,

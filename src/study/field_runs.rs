@@ -60,6 +60,10 @@ pub struct MethodRun {
     pub seconds_placement: f64,
     pub seconds_reconstruction: f64,
     pub seconds_total: f64,
+    /// Samples per pixel of the straight light, where the records left it out
+    /// (`CacheSettings::direct_samples`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direct_samples: Option<u32>,
     pub errors: Option<FieldErrors>,
 }
 
@@ -159,6 +163,7 @@ pub fn cache_run(
         // With a target, the cost of the placement at the found ε (the search's
         // placements are not counted).
         seconds_total: seconds,
+        direct_samples: f.direct_samples,
         errors: Some(field_errors(&f.field, reference)),
         field: f.field,
     })
@@ -183,6 +188,7 @@ pub fn pt_run(
         seconds_placement: 0.0,
         seconds_reconstruction: r.seconds,
         seconds_total: r.seconds,
+        direct_samples: None,
         errors: Some(field_errors(&r.field, reference)),
         field: r.field,
     })
