@@ -53,6 +53,9 @@ struct Point {
     /// Directions per record (cache methods).
     #[serde(skip_serializing_if = "Option::is_none")]
     rays_per_record: Option<usize>,
+    /// The records' edge reach (`--edge-reach`, or a budget's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    edge_reach: Option<f64>,
     spp: Option<u32>,
     #[serde(flatten)]
     run: MethodRun,
@@ -153,6 +156,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                 target: k,
                 budget,
                 rays_per_record: Some(target.rays_per_record()),
+                edge_reach: target.edge_reach_for(&scene),
                 spp: None,
                 run,
             });
@@ -170,6 +174,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
             target: None,
             budget: None,
             rays_per_record: None,
+            edge_reach: None,
             spp: Some(spp),
             run,
         });

@@ -37,8 +37,8 @@ pub struct CacheArgs {
     /// spent on smaller ε and more directions as the measured error model says.
     /// Sets --eps and --rays, and where the scene has emitting segments the
     /// straight light's samples per pixel (a quarter of the placement's rays per
-    /// pixel at B = 1, that share falling as 1/√B; --direct-samples overrides);
-    /// for ours only (the model was measured for ours).
+    /// pixel at B = 1, that share falling as 1/√B; --direct-samples overrides),
+    /// and --edge-reach max(1, 4/√B) unless given; for ours only (the model was measured for ours).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays"])]
     pub budget: Option<f64>,
     /// Directions per cache point.
@@ -133,6 +133,11 @@ impl CacheArgs {
     /// rays: `--direct-samples` (no share), or under `--budget` the budget's where
     /// the scene has lights with an extent (delta lights' straight light is per
     /// pixel anyway: samples of it would repeat it).
+    /// `--edge-reach`, or `--budget`'s.
+    pub fn edge_reach_for(&self, scene: &Scene) -> Option<f64> {
+        (self.edge_reach).or_else(|| self.budget.map(|b| budget_settings(scene, b).edge_reach))
+    }
+
     pub fn direct_for(&self, scene: &Scene) -> (Option<u32>, Option<f64>) {
         match (self.direct_samples, self.budget) {
             (Some(n), _) => (Some(n), None),
@@ -161,7 +166,7 @@ pub fn cache_settings(scene: &Scene, method: CacheMethod, a: &CacheArgs, fp: &Fi
     cs.per_part = a.per_part;
     cs.second_order = a.second_order;
     (cs.direct_samples, cs.direct_share) = a.direct_for(scene);
-    cs.edge_reach = a.edge_reach;
+    cs.edge_reach = a.edge_reach_for(scene);
     cs.probe.phase_roulette = a.phase_roulette;
     cs.record_noise = a.record_noise.target();
     cs
@@ -312,7 +317,7 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         budget: a.cache.budget,
         per_part: a.cache.per_part,
         direct_samples: run.direct_samples,
-        edge_reach: a.cache.edge_reach,
+        edge_reach: a.cache.edge_reach_for(&scene),
         second_order: a.cache.second_order,
         run: &run,
         reference: &ref_info,

@@ -43,20 +43,23 @@ pub struct BudgetSettings {
     /// samples per pixel and its share of the placement's rays
     /// (`CacheSettings::direct_samples`, `CacheSettings::direct_share`).
     pub direct: Option<(u32, f64)>,
+    /// `CacheSettings::edge_reach`.
+    pub edge_reach: f64,
 }
 
-/// What budget `b` (`pipeline::budget::FLATLAND`) sets for ours on `scene`: ε and
-/// directions, and the straight light's samples where the scene has emitting
+/// What budget `b` (`pipeline::budget::FLATLAND`) sets for ours on `scene`: ε,
+/// directions and the edge reach, and the straight light's samples where the scene has emitting
 /// segments (a delta light's straight light is per pixel at every budget: samples
 /// of it would repeat it).
 pub fn budget_settings(scene: &Scene, b: f64) -> BudgetSettings {
-    use crate::pipeline::budget::{FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share, schedule};
+    use crate::pipeline::budget::{FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share, flatland_edge_reach, schedule};
     let (eps, rays) = schedule(b);
     let extended_lights = !scene.emitters.prims.is_empty();
     BudgetSettings {
         eps,
         rays,
         direct: extended_lights.then(|| (FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share(b))),
+        edge_reach: flatland_edge_reach(b),
     }
 }
 
