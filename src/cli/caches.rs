@@ -38,7 +38,8 @@ pub struct CacheArgs {
     /// Sets --eps and --rays, and where the scene has emitting segments the
     /// straight light's samples per pixel (a quarter of the placement's rays per
     /// pixel at B = 1, that share falling as 1/√B; --direct-samples overrides),
-    /// and --edge-reach max(1, 4/√B) unless given; for ours only (the model was measured for ours).
+    /// and --edge-reach max(1, 4/√B) unless given; for ours only (the model was
+    /// measured for ours).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays"])]
     pub budget: Option<f64>,
     /// Directions per cache point.
@@ -129,15 +130,15 @@ impl CacheArgs {
         self.eps_and_rays().1
     }
 
-    /// The straight light's samples per pixel and their share of the placement's
-    /// rays: `--direct-samples` (no share), or under `--budget` the budget's where
-    /// the scene has lights with an extent (delta lights' straight light is per
-    /// pixel anyway: samples of it would repeat it).
     /// `--edge-reach`, or `--budget`'s.
     pub fn edge_reach_for(&self, scene: &Scene) -> Option<f64> {
         (self.edge_reach).or_else(|| self.budget.map(|b| budget_settings(scene, b).edge_reach))
     }
 
+    /// The straight light's samples per pixel and their share of the placement's
+    /// rays: `--direct-samples` (no share), or under `--budget` the budget's where
+    /// the scene has lights with an extent (delta lights' straight light is per
+    /// pixel anyway: samples of it would repeat it).
     pub fn direct_for(&self, scene: &Scene) -> (Option<u32>, Option<f64>) {
         match (self.direct_samples, self.budget) {
             (Some(n), _) => (Some(n), None),

@@ -48,9 +48,9 @@ pub struct BudgetSettings {
 }
 
 /// What budget `b` (`pipeline::budget::FLATLAND`) sets for ours on `scene`: ε,
-/// directions and the edge reach, and the straight light's samples where the scene has emitting
-/// segments (a delta light's straight light is per pixel at every budget: samples
-/// of it would repeat it).
+/// directions and the edge reach, and the straight light's samples where the
+/// scene has emitting segments (a delta light's straight light is per pixel at
+/// every budget: samples of it would repeat it).
 pub fn budget_settings(scene: &Scene, b: f64) -> BudgetSettings {
     use crate::pipeline::budget::{FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share, flatland_edge_reach, schedule};
     let (eps, rays) = schedule(b);
