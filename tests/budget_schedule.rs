@@ -227,6 +227,34 @@ fn caches_takes_a_budget() {
             None => assert!(n >= 4, "{extra:?}: {n}"),
         }
     }
+    // The budget's samples follow the placement's rays: the field is the same
+    // whatever the thread count.
+    let field_with = |threads: &str| {
+        let out_dir = d.path().join(format!("threads{threads}"));
+        let out = volcache()
+            .args(["--threads", threads, "caches"])
+            .arg(&lamp)
+            .args([
+                "--budget",
+                "1",
+                "--res",
+                "12x12",
+                "--steps",
+                "2",
+                "--ref-spp",
+                "4",
+                "--quiet",
+            ])
+            .arg("--out")
+            .arg(&out_dir)
+            .arg("--ref-cache")
+            .arg(d.path().join("ref"))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        volcache::output::read_exr(&out_dir.join("field.exr")).unwrap().2
+    };
+    assert_eq!(field_with("1"), field_with("2"));
     for (args, says) in [
         (vec!["--budget", "1e5"], "--budget must lie between"),
         (vec!["--budget", "nan"], "--budget must lie between"),
