@@ -158,12 +158,10 @@ pub fn render_cached(
         Some(n) => place_with_count(scene, &source, cs, cached, n, memo, progress)?,
         None => place(scene, &source, cs, cached, memo, progress)?,
     };
-    // The straight light's samples as a share of what the records cost per pixel.
+    // The straight light's samples as a share of what the records cost per pixel
+    // (the placement's query points are the pixels inside the medium).
     if let (Some(min), Some(share)) = (placement.direct_samples, cs.direct_share) {
-        let points = (0..fp.height)
-            .flat_map(|j| (0..fp.width).map(move |i| (i, j)))
-            .filter(|&(i, j)| scene.medium_at(field.pixel_center(i, j)).is_some())
-            .count();
+        let points = placement.query_points as usize;
         placement.direct_samples = Some(shared_direct_samples(min, share, placement.rays, points));
     }
     Ok(reconstruct(scene, fp, cs, field, placement))
