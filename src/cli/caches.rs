@@ -34,12 +34,13 @@ pub struct CacheArgs {
     pub caches: Option<usize>,
     /// One budget for the cache (`pipeline::budget`): B = 1 is ε 0.025 with 256
     /// directions per record; a budget k times larger costs about k times as much,
-    /// spent on smaller ε and more directions as the measured error model says.
-    /// Sets --eps and --rays, and where the scene has emitting segments the
-    /// straight light's samples per pixel (a quarter of the placement's rays per
-    /// pixel at B = 1, that share falling as 1/√B; --direct-samples overrides),
-    /// and --edge-reach max(1, 4/√B) unless given; for ours only (the model was
-    /// measured for ours).
+    /// spent as the measured error model says: on smaller ε alone up to B ≈ 4.7
+    /// (ε 0.001), then on smaller ε and more directions alike (below B = 1, on
+    /// fewer directions and larger ε). Sets --eps and --rays, and where the scene
+    /// has emitting segments the straight light's samples per pixel (a quarter of
+    /// the placement's rays per pixel at B = 1, that share falling as 1/√B;
+    /// --direct-samples overrides), and --edge-reach max(1, 4√(ε/0.025)) unless
+    /// given; for ours only (the model was measured for ours).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays"])]
     pub budget: Option<f64>,
     /// Directions per cache point.

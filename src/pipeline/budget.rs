@@ -18,8 +18,10 @@
 //! ε^−q · rays · spp^s, Lagrange's condition makes every term fall alike, as
 //! T^−γ with γ = 1 / (1 + q/(2p) + s): ε ∝ T^{−γ/(2p)}, rays ∝ T^γ, spp ∝ T^γ, and
 //! the error ∝ T^{−γ/2}. (2D fields have no camera samples: s = 0, γ = 2p/(2p+q).)
-//! B = 1 is a point where the measurements saw the terms alike, so that the
-//! schedule starts balanced and stays so.
+//! In 3D, B = 1 is a point where the measurements saw the terms alike, so that
+//! the schedule starts balanced and stays so. In 2D the terms are alike at a
+//! larger budget (≈ 4.7, [`ErrorModel::balanced_eps_scale`]): from B = 1 up to it
+//! the budget goes to ε alone.
 
 /// A measured error model: exponents and the budget's reference point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,20 +35,35 @@ pub struct ErrorModel {
     pub camera: Option<(f64, f64)>,
     /// Rays per record at budget 1.
     pub rays_at_one: f64,
+    /// Where the terms were measured alike when that is not at budget 1: ε there
+    /// as a multiple of budget 1's, with budget 1's rays. From budget 1 to that
+    /// budget (ε^−q of budget 1's cost) the rays stay at budget 1's — fewer
+    /// directions miss thin features, an error more records do not remove — and ε
+    /// takes the whole budget (ε ∝ B^−1/q); above it, and below budget 1, the
+    /// schedule of equal terms. None: budget 1 is balanced, equal terms throughout.
+    pub balanced_eps_scale: Option<f64>,
 }
 
-/// 2D fields (`volcache caches --budget`), measured with `volcache caches` at 64²,
-/// ours, seeds 1–2, ε 0.1 … 0.00625, 256 / 1024 / 4096 rays (numbers in the
-/// commit): K ∝ ε^−0.5 (occluder 0.49–0.52, windows 0.49–0.56), placement time ∝
-/// K · rays (0.46–0.54 against ε), interpolation error ∝ ε^0.3 (occluder
-/// 0.24–0.37, windows 0.24–0.30); at ε 0.025 with 256 rays the two terms were
-/// alike (at ε ≤ 0.0125 more rays began to pay, above it they did not). ε ∝
-/// B^−0.91, rays ∝ B^0.55, error ∝ B^−0.27.
+/// 2D fields (`volcache caches --budget`), measured with the budget's straight
+/// light per pixel and edge reach: `volcache caches --eps --rays --edge-reach
+/// max(1, 4 (ε/0.025)^0.55)`, ε 0.05 … 0.00015 × 64 … 2048 rays, on
+/// `occluder.json` at 128² (256 straight-light samples per pixel) and
+/// `windows.json` at 220×145 (32,768-spp references, seed 1; numbers in the
+/// commit). The fit E² = A ε^{2p} + C/rays (≥ 256 rays, the reference's noise
+/// taken out) gave p = 0.335 / 0.339, K ∝ ε^−0.45 / ε^−0.51, and the terms
+/// alike with 256 rays at ε 0.0004 (occluder) and 0.0069 (windows); below 256
+/// rays the error rose faster than 1/rays (occluder at ε 0.0015: 0.0060 / 0.014
+/// / 0.016 at 256 / 128 / 64). Balanced at ε 0.001 (budget ≈ 4.7), the model
+/// puts both scenes within 1.25× of their own best time at every budget (a
+/// balance at budget 1's ε 0.025, the schedule until this commit, lost 5.5× on
+/// the occluder; at 0.0004, 1.7× on windows). ε ∝ B^−2.1 up to it, then
+/// ε ∝ B^−0.88 and rays ∝ B^0.58; the error ∝ B^−0.29 there.
 pub const FLATLAND: ErrorModel = ErrorModel {
-    error_exponent_p: 0.3,
-    count_exponent_q: 0.5,
+    error_exponent_p: 0.33,
+    count_exponent_q: 0.48,
     camera: None,
     rays_at_one: 256.0,
+    balanced_eps_scale: Some(0.04),
 };
 
 /// ε of a 2D field at budget 1.
@@ -104,20 +121,20 @@ pub fn shared_direct_samples(min: u32, share: f64, rays: u64, points: usize) -> 
 
 /// The edge reach of a 2D budget (`CacheSettings::edge_reach`): a record's radii
 /// at most `k` × its distance to the nearest surface edge or point light it sees,
-/// k = max(1, 4/√B). Why: around an edge the light turns with the angle seen from
-/// it, so a first-order expansion at distance d from an edge whose light jumps by
-/// ΔL errs by ≈ ΔL (r/d)² at radius r; keeping that below ε L asks r ≤ d √(εL/ΔL):
-/// a reach ∝ √ε ∝ B^−0.45, here B^−0.5. Where the reach binds, records crowd the
-/// edges at a count ε does not set (130 on the occluder at k = 0.5, 2,400 on the
-/// forest at k = 1, budget 1), so it is not taken below 1. Measured on
-/// `occluder.json` at 128² (32,768-spp reference, seed 1), without → with a reach
-/// of 1: budgets 16 / 64 / 128 / 256 RMSE 0.0072 / 0.0044 / 0.0093 / 0.0061 →
-/// 0.0062 / 0.0040 / 0.0042 / 0.0032 (the error no longer rises with the budget:
-/// records beside the emitter's ends reached across them) in 1.0–1.04× the time;
-/// at budget 1 a reach of 1 cost (0.0172 → 0.0223), of 2 a little (0.0188).
+/// k = max(1, 4 √(ε/ε₁)) with ε₁ budget 1's ε. Why: around an edge the light turns
+/// with the angle seen from it, so a first-order expansion at distance d from an
+/// edge whose light jumps by ΔL errs by ≈ ΔL (r/d)² at radius r; keeping that
+/// below ε L asks r ≤ d √(εL/ΔL): a reach ∝ √ε. Where the reach binds, records
+/// crowd the edges at a count ε does not set (130 on the occluder at k = 0.5,
+/// 2,400 on the forest at k = 1, budget 1), so it is not taken below 1. Measured
+/// on `occluder.json` at 128² (32,768-spp reference, seed 1), without → with a
+/// reach of 1: ε 0.0020 / 0.00057 / 0.00031 / 0.00016 (1162 … 5270 rays) RMSE
+/// 0.0072 / 0.0044 / 0.0093 / 0.0061 → 0.0062 / 0.0040 / 0.0042 / 0.0032 (the
+/// error no longer rises as ε falls: records beside the emitter's ends reached
+/// across them) in 1.0–1.04× the time; at budget 1 a reach of 1 cost (0.0172 →
+/// 0.0223), of 2 a little (0.0188).
 pub fn flatland_edge_reach(b: f64) -> f64 {
-    let b = b.clamp(MIN_BUDGET, MAX_BUDGET);
-    (4.0 / b.sqrt()).max(1.0)
+    (4.0 * FLATLAND.schedule(b).eps_scale.sqrt()).max(1.0)
 }
 
 /// 3D images (`volcache render3d --budget`), measured with `volcache render3d` on
@@ -136,6 +153,7 @@ pub const VOLUME: ErrorModel = ErrorModel {
     count_exponent_q: 0.5,
     camera: Some((0.25, 16.0)),
     rays_at_one: 256.0,
+    balanced_eps_scale: None,
 };
 
 /// ε of a 3D image at budget 1, as a multiple of the scene's default
@@ -157,9 +175,9 @@ pub const VOLUME_EPS_AT_ONE: f64 = 0.25;
 /// 10% → 32%), which the camera's cost exponent does not count.
 pub const VOLUME_DIRECT_SAMPLES: u32 = 4;
 
-/// The smallest budget (2D: ε ≈ 0.31, 56 rays per record: below, records are noise).
+/// The smallest budget (2D: ε ≈ 0.28, 51 rays per record: below, records are noise).
 pub const MIN_BUDGET: f64 = 1.0 / 16.0;
-/// The largest budget (2D: ε ≈ 1.3·10^−5, ≈ 23,000 rays per record).
+/// The largest budget (2D: ε ≈ 2.6·10^−6, ≈ 13,000 rays per record).
 pub const MAX_BUDGET: f64 = 4096.0;
 
 /// What a budget sets.
@@ -187,11 +205,31 @@ impl ErrorModel {
     pub fn schedule(&self, b: f64) -> Schedule {
         let b = b.clamp(MIN_BUDGET, MAX_BUDGET);
         let (eps_exp, gamma) = self.exponents();
-        let grow = b.powf(gamma);
-        Schedule {
-            eps_scale: b.powf(eps_exp),
-            rays: (self.rays_at_one * grow).round() as usize,
-            spp: self.camera.map(|(_, spp)| (spp * grow).round().max(1.0) as u32),
+        // Equal terms from (budget `from`, ε scale `eps_at`) on.
+        let equal_terms = |from: f64, eps_at: f64| {
+            let grow = (b / from).powf(gamma);
+            Schedule {
+                eps_scale: eps_at * (b / from).powf(eps_exp),
+                rays: (self.rays_at_one * grow).round() as usize,
+                spp: self.camera.map(|(_, spp)| (spp * grow).round().max(1.0) as u32),
+            }
+        };
+        match self.balanced_eps_scale {
+            Some(eps_at) if b > 1.0 => {
+                let balanced = eps_at.powf(-self.count_exponent_q);
+                if b >= balanced {
+                    equal_terms(balanced, eps_at)
+                } else {
+                    Schedule {
+                        eps_scale: b.powf(-1.0 / self.count_exponent_q),
+                        rays: self.rays_at_one.round() as usize,
+                        spp: self.camera.map(|(_, spp)| spp.round().max(1.0) as u32),
+                    }
+                }
+            }
+            // Below budget 1 records are few, their count held up by covering the
+            // field, so a larger ε buys little time back: fewer rays do.
+            _ => equal_terms(1.0, 1.0),
         }
     }
 }
@@ -251,11 +289,30 @@ mod tests {
 
     #[test]
     fn the_edge_reach_tightens_with_the_budget_down_to_one() {
-        let k: Vec<f64> = [MIN_BUDGET, 1.0, 4.0, 16.0, 64.0, f64::INFINITY]
-            .into_iter()
-            .map(flatland_edge_reach)
-            .collect();
-        assert_eq!(k, [16.0, 4.0, 2.0, 1.0, 1.0, 1.0]);
+        assert_eq!(flatland_edge_reach(1.0), 4.0);
+        assert!(flatland_edge_reach(MIN_BUDGET) > 8.0);
+        assert!(flatland_edge_reach(0.5) > flatland_edge_reach(0.7));
+        for b in [4.0, 16.0, 64.0, f64::INFINITY] {
+            assert_eq!(flatland_edge_reach(b), 1.0);
+        }
+    }
+
+    /// From budget 1 to the 2D model's balanced budget the rays stay and ε takes
+    /// the budget; below 1 and from it on, the terms fall alike (ε^{2p} and 1/rays
+    /// by one factor).
+    #[test]
+    fn the_2d_rays_stay_until_the_terms_are_balanced() {
+        let balanced = 0.04f64.powf(-FLATLAND.count_exponent_q);
+        for b in [1.0, 2.0, 4.0, balanced] {
+            assert_eq!(FLATLAND.schedule(b).rays, 256, "budget {b}");
+        }
+        assert!(FLATLAND.schedule(0.5).rays < 256);
+        let at = FLATLAND.schedule(balanced);
+        assert!((at.eps_scale - 0.04).abs() < 1e-12, "{at:?}");
+        let (a, b) = (FLATLAND.schedule(2.0 * balanced), FLATLAND.schedule(128.0 * balanced));
+        let interp = (b.eps_scale / a.eps_scale).powf(2.0 * FLATLAND.error_exponent_p);
+        let rays = a.rays as f64 / b.rays as f64;
+        assert!((interp / rays - 1.0).abs() < 0.01, "{interp} {rays}");
     }
 
     /// Every error term falls alike: ε^{2p}, 1/rays and 1/spp by one factor.
