@@ -94,10 +94,23 @@ fn mean_squared_error(rmse: impl Iterator<Item = f64>, noise: f64) -> f64 {
     sum / n as f64
 }
 
-/// The RMSE of path tracing with at least `rays` rays (seed `seed`).
-fn path_tracing_with(scene: &Scene, fp: &FieldParams, reference: &Field, rays: u64, seed: u64) -> f64 {
-    let one = render_field(scene, &FieldParams { spp: 1, ..fp.clone() }, &Progress::new()).unwrap();
-    let spp = (rays as f64 / one.rays as f64).ceil().max(1.0) as u32;
+/// The rays of one path-traced sample per pixel of `fp`.
+fn rays_per_spp(scene: &Scene, fp: &FieldParams) -> u64 {
+    render_field(scene, &FieldParams { spp: 1, ..fp.clone() }, &Progress::new())
+        .unwrap()
+        .rays
+}
+
+/// The RMSE of path tracing with at least `rays` rays (seed `seed`), `per_spp`
+/// rays a sample per pixel ([`rays_per_spp`]).
+fn path_tracing_with(
+    scene: &Scene,
+    fp: &FieldParams,
+    reference: &Field,
+    (rays, per_spp): (u64, u64),
+    seed: u64,
+) -> f64 {
+    let spp = (rays as f64 / per_spp as f64).ceil().max(1.0) as u32;
     let pt = render_field(
         scene,
         &FieldParams {
@@ -188,10 +201,11 @@ fn four_times_the_budget_lowers_the_error() {
     let (scene, fp, reference, noise) = &setup;
     assert_eq!(budget_settings(scene, 1.0).direct, None);
     let runs = four_times_the_budget_lowers_the_error_of(&setup, 0.9, 4);
+    let per_spp = rays_per_spp(scene, fp);
     for (b, runs) in [1, 4].into_iter().zip(&runs) {
         let pt: Vec<f64> = (1..)
             .zip(runs)
-            .map(|(seed, r)| path_tracing_with(scene, fp, reference, r.rays, seed + 100))
+            .map(|(seed, r)| path_tracing_with(scene, fp, reference, (r.rays, per_spp), seed + 100))
             .collect();
         let ratio =
             mean_squared_error(runs.iter().map(|r| r.rmse), *noise) / mean_squared_error(pt.iter().copied(), *noise);

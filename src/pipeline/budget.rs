@@ -302,13 +302,15 @@ mod tests {
     /// by one factor).
     #[test]
     fn the_2d_rays_stay_until_the_terms_are_balanced() {
-        let balanced = 0.04f64.powf(-FLATLAND.count_exponent_q);
+        let eps_at = FLATLAND.balanced_eps_scale.expect("2D is balanced above budget 1");
+        let balanced = eps_at.powf(-FLATLAND.count_exponent_q);
+        let rays_at_one = FLATLAND.rays_at_one as usize;
         for b in [1.0, 2.0, 4.0, balanced] {
-            assert_eq!(FLATLAND.schedule(b).rays, 256, "budget {b}");
+            assert_eq!(FLATLAND.schedule(b).rays, rays_at_one, "budget {b}");
         }
-        assert!(FLATLAND.schedule(0.5).rays < 256);
+        assert!(FLATLAND.schedule(0.5).rays < rays_at_one);
         let at = FLATLAND.schedule(balanced);
-        assert!((at.eps_scale - 0.04).abs() < 1e-12, "{at:?}");
+        assert!((at.eps_scale - eps_at).abs() < 1e-12, "{at:?}");
         let (a, b) = (FLATLAND.schedule(2.0 * balanced), FLATLAND.schedule(128.0 * balanced));
         let interp = (b.eps_scale / a.eps_scale).powf(2.0 * FLATLAND.error_exponent_p);
         let rays = a.rays as f64 / b.rays as f64;
