@@ -21,6 +21,8 @@ $V figure compare3d scenes3d/fog_box.json --res 128x128 "${COMMON[@]}" --caches 
 # pipeline::budget (VOLUME, VOLUME_DIRECT_SAMPLES);
 # jarosz08 at ours' record counts), against the same 8192-spp reference. Budgets
 # 1/4 and 1: with 64 camera samples at budget 1 the staircase's budget 4 (133
-# camera samples at 160x120) takes about 7 minutes a method.
+# camera samples at 160x120) takes about 7 minutes a method. Known problem: at
+# budget 1 Jarosz 2008's equal-count search for ours' 2,556 records had not ended
+# after 25 minutes (each probe of its search places records for 64 camera samples).
 $V bench tradeoff3d scenes3d/staircase.json --res 160x120 --ref-spp 8192 \
     --budgets 0.25,1 --spps 4,16,64,256,1024 --out results/tradeoff3d_budget
