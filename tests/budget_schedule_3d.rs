@@ -62,9 +62,10 @@ const MEDIUM_BOUND: f64 = 0.7;
 const IMAGE_BOUND: f64 = 0.85;
 /// Of the four seeds, at least this many have a lower medium RMSE at each step.
 /// Measured: 4 and 4, seeds 6–9 3 and 4 (seed 9's budget 1/4 landed 0.0048
-/// against budget 1's 0.0052; with 16 camera samples at budget 1, seed 2's). (With the straight light cached, every seed fell;
-/// sampling it per point lowered budget 1/4's error most — 0.0215 → 0.0178 mean —
-/// so the first step is smaller and a single seed can invert.)
+/// against budget 1's 0.0052; with 16 camera samples at budget 1, seed 2's).
+/// (With the straight light cached, every seed fell; sampling it per point
+/// lowered budget 1/4's error most — 0.0215 → 0.0178 mean — so the first step is
+/// smaller and a single seed can invert.)
 const SEEDS_THAT_FALL: usize = 3;
 
 /// Budgets 1/4, 1 and 4 (ε a fraction of the scene's default, 123 / 256 / 531

@@ -93,8 +93,9 @@ pub struct Render3dArgs {
     /// pixel; a budget k times larger costs k times as much by the error model's
     /// count (measured at 48×36: 1.5–2.3× per 4×, as a record's fixed cost does not
     /// grow with its directions), spent where the model says it pays (ε,
-    /// directions and camera samples, so that their errors fall alike). Sets --eps, --rays and --spp, and the straight
-    /// light is sampled at every march point (--direct-samples 4 unless given).
+    /// directions and camera samples, so that their errors fall alike). Sets
+    /// --eps, --rays and --spp, and the straight light is sampled at every march
+    /// point (--direct-samples 4 unless given).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays", "records_in"])]
     pub budget: Option<f64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full image (same samples as
