@@ -125,6 +125,52 @@ fn a_cached_render_spends_its_time_budget_on_camera_samples() {
     assert!(placed < secs, "records {placed} s of {secs} s");
 }
 
+/// `--place-spp`: the records are placed over the first camera samples of each
+/// pixel only, the image takes all of them; the summary says how many were
+/// placed over, and the placement walked about that share of the march points.
+#[test]
+fn records_can_be_placed_over_fewer_camera_samples_than_the_image_takes() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], out: &str| -> serde_json::Value {
+        let o = volcache()
+            .args([
+                "render3d",
+                "scenes3d/fog_box.json",
+                "--method",
+                "ours",
+                "--res",
+                "16x12",
+            ])
+            .args(["--rays", "128", "--steps", "6", "--spp", "8", "--quiet", "--out"])
+            .arg(dir.path().join(out))
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join(out).join("fog_box_ours.json")).unwrap()).unwrap()
+    };
+    let all = run(&[], "all");
+    let two = run(&["--place-spp", "2"], "two");
+    assert_eq!(
+        (all["cache"]["placed_spp"].as_u64(), two["cache"]["placed_spp"].as_u64()),
+        (Some(8), Some(2))
+    );
+    assert_eq!(two["spp"], 8);
+    let points = |j: &serde_json::Value| j["cache"]["query_points"].as_f64().unwrap();
+    let share = points(&two) / points(&all);
+    assert!(
+        (0.2..0.3).contains(&share),
+        "placed over 2 of 8 samples: {share:.3} of the march points"
+    );
+    let mean = |j: &serde_json::Value| j["mean_luminance"].as_f64().unwrap();
+    let (a, b) = (mean(&all), mean(&two));
+    println!(
+        "mean luminance {a} placed over all, {b} over two; uncovered {}",
+        two["cache"]["uncovered"]
+    );
+    assert!(a.is_finite() && b.is_finite() && (b / a - 1.0).abs() < 0.01, "{a} {b}");
+}
+
 #[test]
 fn bad_input_is_a_clear_error() {
     let fails_with = |args: &[&str], want: &str| {
@@ -170,6 +216,22 @@ fn bad_input_is_a_clear_error() {
             "0",
         ],
         "--image-march-step",
+    );
+    fails_with(&["render3d", s, "--method", "ours", "--place-spp", "0"], "--place-spp");
+    fails_with(
+        &[
+            "render3d",
+            s,
+            "--method",
+            "ours",
+            "--time-budget",
+            "5",
+            "--spp",
+            "2",
+            "--place-spp",
+            "1",
+        ],
+        "not both",
     );
     fails_with(&["render3d", s, "--method", "ours", "--eps", "nan"], "--eps");
     fails_with(

@@ -2,9 +2,9 @@
 //! swept over target record counts (ε searched with memoised light fields; each
 //! run's time is its placement — checks plus the capture time of the records it
 //! uses — plus its reconstruction) — or ours over budgets (`--budgets`, each one
-//! placement at its ε, directions and camera samples) and jarosz08 at ours' counts
-//! with the same directions and camera samples — and path tracing over samples per
-//! pixel; errors
+//! placement at its ε, directions and camera samples, placed over one camera
+//! sample in eight) and jarosz08 at ours' counts with the same directions and
+//! camera samples, placed alike — and path tracing over samples per pixel; errors
 //! of the image and of its medium part against one converged reference. Reports
 //! rays/s, records/s, the speedup of ours over Jarosz 2008 at equal error and each
 //! method's time to 3%, 1% and 0.3% relative RMSE ([`volcache::study::targets`]).
@@ -40,8 +40,9 @@ pub struct Tradeoff3dArgs {
     pub counts: Vec<usize>,
     /// Sweep ours over these budgets (`render3d --budget`) instead of record
     /// counts: each point one placement at the budget's ε, directions and camera
-    /// samples, no search; jarosz08 at ours' record count with the same directions
-    /// and camera samples (the equal-count protocol).
+    /// samples (placed over one in eight unless --place-spp), no search; jarosz08
+    /// at ours' record count with the same directions and camera samples (the
+    /// equal-count protocol).
     #[arg(long, value_delimiter = ',', conflicts_with_all = ["counts", "eps", "caches", "rays", "spp"])]
     pub budgets: Option<Vec<f64>>,
     /// Samples per pixel for path tracing.
@@ -120,11 +121,13 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
                         None => format!("budget {b}"),
                     };
                     let point = CachePoint {
-                        // (Both methods with the budget's straight-light samples.)
+                        // (Both methods with the budget's straight-light samples and
+                        // placed camera samples: a search probe walks only those.)
                         cache: Cache3dArgs {
                             eps,
                             rays: s.rays,
                             direct_samples: a.cache.direct_samples.or(Some(s.direct_samples)),
+                            place_spp: a.cache.place_spp.or(Some(s.place_spp)),
                             ..a.cache.clone()
                         },
                         image: RenderParams {

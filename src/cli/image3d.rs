@@ -24,6 +24,10 @@ pub struct CacheSummary {
     pub records: usize,
     pub target_records: Option<usize>,
     pub query_points: u64,
+    /// The camera samples of each pixel the placement visited (`--place-spp`;
+    /// 0 in summaries written before it was recorded).
+    #[serde(default)]
+    pub placed_spp: u32,
     pub march_step: f64,
     pub surface_paths: u32,
     pub placement_seconds: f64,

@@ -94,8 +94,9 @@ pub struct Render3dArgs {
     /// count (measured at 48×36: 1.5–2.3× per 4×, as a record's fixed cost does not
     /// grow with its directions), spent where the model says it pays (ε,
     /// directions and camera samples, so that their errors fall alike). Sets
-    /// --eps, --rays and --spp, and the straight light is sampled at every march
-    /// point (--direct-samples 4 unless given).
+    /// --eps, --rays and --spp; the straight light is sampled at every march
+    /// point (--direct-samples 4 unless given) and the records are placed over
+    /// one camera sample in eight (--place-spp unless given).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays", "records_in"])]
     pub budget: Option<f64>,
     /// Render only the pixels [x0, x1) × [y0, y1) of the full image (same samples as
@@ -177,6 +178,10 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
             "--time-budget must be a positive number of seconds"
         );
         params.time_budget = Some(b);
+        anyhow::ensure!(
+            a.spp.is_none() || a.cache.place_spp.is_none() || a.method == Method::Pt,
+            "--spp beside --time-budget is the camera samples placement visits: give it or --place-spp, not both"
+        );
         params.spp = match a.method {
             Method::Pt => a.spp.unwrap_or(1 << 24),
             // --spp is then the camera samples placement visits; more follow.
@@ -192,6 +197,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         let s = budget_settings(&scene, b);
         (cache.eps, cache.rays, params.spp) = (Some(s.eps), s.rays, s.spp);
         cache.direct_samples.get_or_insert(s.direct_samples);
+        cache.place_spp.get_or_insert(s.place_spp);
     } else if let Some(s) = a.spp {
         check_spp("--spp", s, limits::MAX_SPP)?;
         params.spp = s;
@@ -220,7 +226,9 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
             .map(|img| (Some(img), None))
             .map_err(anyhow::Error::from),
         Some(m) => {
-            let place_spp = a.time_budget.map(|_| a.spp.unwrap_or(4));
+            // With a time budget the camera samples placement visits are --spp's or
+            // --place-spp's (the rest added as the time allows).
+            let place_spp = a.time_budget.map(|_| a.cache.place_spp.or(a.spp).unwrap_or(4));
             run_cached(&scene, (&params, place_spp), m, &cache, &a.records, &progress).map(|(img, c)| (img, Some(c)))
         }
     };

@@ -45,8 +45,16 @@ pub struct Cache3dArgs {
     /// Distance between march points along camera rays (default: scene size / 128).
     #[arg(long)]
     pub march_step: Option<f64>,
-    /// With --time-budget: the march step of the camera samples beyond the placed
-    /// ones (default: --march-step). Coarser is cheaper per sample and as unbiased.
+    /// Place records over the first N camera samples of each pixel only (default:
+    /// all; with --time-budget, --spp; with --budget, one in eight): the others
+    /// read the records, and a march point none covers is path traced (counted in
+    /// the summary's `uncovered`). The records' count barely follows the camera
+    /// samples, the placement's walk over their march points does.
+    #[arg(long)]
+    pub place_spp: Option<u32>,
+    /// With --time-budget or --place-spp: the march step of the camera samples
+    /// beyond the placed ones (default: --march-step). Coarser is cheaper per
+    /// sample and as unbiased.
     #[arg(long)]
     pub image_march_step: Option<f64>,
     /// Reflected-light samples per camera sample at the first surface.
@@ -153,10 +161,14 @@ impl Cache3dArgs {
             anyhow::ensure!(finite_pos(d), "--march-step must be a positive distance");
             cp.march_step = d;
         }
+        if let Some(n) = self.place_spp {
+            check_spp("--place-spp", n, volcache::limits::MAX_SPP)?;
+            cp.place_spp = Some(n);
+        }
         if let Some(d) = self.image_march_step {
             anyhow::ensure!(
-                image.time_budget.is_some(),
-                "--image-march-step sets the march of the camera samples a --time-budget adds: give --time-budget"
+                image.time_budget.is_some() || self.place_spp.is_some(),
+                "--image-march-step sets the march of the camera samples beyond the placed ones: give --time-budget or --place-spp"
             );
             anyhow::ensure!(finite_pos(d), "--image-march-step must be a positive distance");
             cp.image_march_step = Some(d);
@@ -305,6 +317,7 @@ pub fn run_cached(
         records: placement.record_count(),
         target_records: a.caches,
         query_points: placement.query_points,
+        placed_spp: cp.placed_spp(),
         march_step: cp.march_step,
         surface_paths: cp.surface_paths,
         placement_seconds: placement.seconds,

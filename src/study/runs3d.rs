@@ -36,6 +36,14 @@ pub struct Run3d {
     pub surface_records: usize,
     pub eps: Option<f64>,
     pub spp: u32,
+    /// The camera samples of each pixel the placement visited (cache methods,
+    /// when fewer than `spp`: `CachedRenderParams::place_spp`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub placed_spp: Option<u32>,
+    /// March points of the camera samples beyond the placed ones that no record
+    /// covered, path traced instead (cache methods).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncovered: Option<u64>,
     /// The budget that set ε, the directions and the camera samples (ours), or
     /// whose record count, directions and camera samples this run shares
     /// (jarosz08), in a budget sweep.
@@ -69,6 +77,8 @@ impl Run3d {
             surface_records: 0,
             eps: None,
             spp: image.spp,
+            placed_spp: None,
+            uncovered: None,
             budget: None,
             rays_per_record: None,
             direct_samples: None,
@@ -105,8 +115,11 @@ pub fn cache_run(
 ) -> Result<Run3d, CountError> {
     let r = render_cached(scene, cp, cs, target, memo, progress)?;
     let (placement, surfaces) = (r.placement, r.surfaces);
+    let uncovered = r.reconstruction.uncovered;
     let mut run = Run3d::rendered(method_name(cs.method), r.reconstruction.image, reference);
     run.records = placement.record_count();
+    run.placed_spp = (cp.placed_spp() < run.spp).then_some(cp.placed_spp());
+    run.uncovered = Some(uncovered);
     run.eps = Some(placement.eps);
     run.rays_per_record = Some(cs.probe.rays);
     run.direct_samples = cs.direct_samples;

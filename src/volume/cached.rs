@@ -54,6 +54,9 @@ pub struct BudgetSettings {
     pub rays: usize,
     /// Camera samples per pixel.
     pub spp: u32,
+    /// The camera samples the placement visits of each pixel
+    /// (`pipeline::budget::volume_placed_spp`).
+    pub place_spp: u32,
     /// Samples of the straight light per march point
     /// (`pipeline::budget::VOLUME_DIRECT_SAMPLES`).
     pub direct_samples: u32,
@@ -61,12 +64,14 @@ pub struct BudgetSettings {
 
 /// What budget `b` (`pipeline::budget::VOLUME`) sets for ours on `scene`.
 pub fn budget_settings(scene: &Scene, b: f64) -> BudgetSettings {
-    use crate::pipeline::budget::{VOLUME, VOLUME_DIRECT_SAMPLES, VOLUME_EPS_AT_ONE};
+    use crate::pipeline::budget::{VOLUME, VOLUME_DIRECT_SAMPLES, VOLUME_EPS_AT_ONE, volume_placed_spp};
     let s = VOLUME.schedule(b);
+    let spp = s.spp.unwrap_or(1);
     BudgetSettings {
         eps: default_eps(CacheMethod::Ours, scene) * VOLUME_EPS_AT_ONE * s.eps_scale,
         rays: s.rays,
-        spp: s.spp.unwrap_or(1),
+        spp,
+        place_spp: volume_placed_spp(spp),
         direct_samples: VOLUME_DIRECT_SAMPLES,
     }
 }
