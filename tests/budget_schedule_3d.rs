@@ -186,7 +186,12 @@ fn render3d_takes_a_budget() {
     assert_eq!(s["cache"]["settings"]["direct_samples"], b.direct_samples);
     assert_eq!(s["cache"]["placed_spp"], b.place_spp);
     assert!(b.place_spp < b.spp, "{b:?}");
-    // --direct-samples and --place-spp beside a budget are the user's.
+    assert_eq!(
+        s["cache"]["march_step"],
+        volcache::volume::cached_params::default_march_step(&parsed)
+    );
+    // --direct-samples, --place-spp and --image-march-step beside a budget are
+    // the user's.
     let s = render(
         &scene,
         &d.path().join("ok1"),
@@ -199,6 +204,8 @@ fn render3d_takes_a_budget() {
             "1",
             "--place-spp",
             "3",
+            "--image-march-step",
+            "0.5",
             "--res",
             "4x3",
             "--steps",
@@ -207,6 +214,7 @@ fn render3d_takes_a_budget() {
     );
     assert_eq!(s["cache"]["settings"]["direct_samples"], 1);
     assert_eq!(s["cache"]["placed_spp"], 3);
+    assert_eq!(s["cache"]["image_march_step"], 0.5);
     for (args, says) in [
         (vec!["--budget", "1e5"], "--budget must lie between"),
         (vec!["--budget", "nan"], "--budget must lie between"),

@@ -29,6 +29,10 @@ pub struct CacheSummary {
     #[serde(default)]
     pub placed_spp: u32,
     pub march_step: f64,
+    /// The march step of the camera samples beyond the placed ones, when coarser
+    /// (`--image-march-step`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_march_step: Option<f64>,
     pub surface_paths: u32,
     pub placement_seconds: f64,
     pub placement_rays: u64,

@@ -52,9 +52,9 @@ pub struct Cache3dArgs {
     /// samples, the placement's walk over their march points does.
     #[arg(long)]
     pub place_spp: Option<u32>,
-    /// With --time-budget or --place-spp: the march step of the camera samples
-    /// beyond the placed ones (default: --march-step). Coarser is cheaper per
-    /// sample and as unbiased.
+    /// With --time-budget, --place-spp or --budget: the march step of the camera
+    /// samples beyond the placed ones (default: --march-step). Coarser is cheaper
+    /// per sample and as unbiased; whether it pays depends on the scene (README).
     #[arg(long)]
     pub image_march_step: Option<f64>,
     /// Reflected-light samples per camera sample at the first surface.
@@ -319,6 +319,7 @@ pub fn run_cached(
         query_points: placement.query_points,
         placed_spp: cp.placed_spp(),
         march_step: cp.march_step,
+        image_march_step: cp.image_march_step,
         surface_paths: cp.surface_paths,
         placement_seconds: placement.seconds,
         placement_rays: placement.rays,

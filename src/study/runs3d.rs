@@ -40,6 +40,10 @@ pub struct Run3d {
     /// when fewer than `spp`: `CachedRenderParams::place_spp`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub placed_spp: Option<u32>,
+    /// The march step of the camera samples beyond the placed ones, when it is
+    /// not the placement's (cache methods: `CachedRenderParams::image_march_step`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_march_step: Option<f64>,
     /// March points of the camera samples beyond the placed ones that no record
     /// covered, path traced instead (cache methods).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -78,6 +82,7 @@ impl Run3d {
             eps: None,
             spp: image.spp,
             placed_spp: None,
+            image_march_step: None,
             uncovered: None,
             budget: None,
             rays_per_record: None,
@@ -120,6 +125,7 @@ pub fn cache_run(
     run.records = placement.record_count();
     run.placed_spp = (cp.placed_spp() < run.spp).then_some(cp.placed_spp());
     run.uncovered = Some(uncovered);
+    run.image_march_step = cp.image_march_step.filter(|_| run.placed_spp.is_some());
     run.eps = Some(placement.eps);
     run.rays_per_record = Some(cs.probe.rays);
     run.direct_samples = cs.direct_samples;

@@ -46,11 +46,16 @@ pub struct CachedRenderParams {
     pub image_march_step: Option<f64>,
 }
 
+/// The march step of camera rays unless given: the scene's size / 128.
+pub fn default_march_step(scene: &Scene) -> f64 {
+    scene.scale / 128.0
+}
+
 impl CachedRenderParams {
     pub fn from_scene(scene: &Scene) -> Self {
         CachedRenderParams {
             image: RenderParams::from_scene(scene),
-            march_step: scene.scale / 128.0,
+            march_step: default_march_step(scene),
             surface_paths: 4,
             surface_eps: None,
             place_spp: None,
