@@ -219,6 +219,10 @@ fn bad_input_is_a_clear_error() {
     );
     fails_with(&["render3d", s, "--method", "ours", "--place-spp", "0"], "--place-spp");
     fails_with(
+        &["render3d", s, "--method", "ours", "--spp", "4", "--place-spp", "8"],
+        "more than the image's 4",
+    );
+    fails_with(
         &[
             "render3d",
             s,

@@ -163,6 +163,11 @@ impl Cache3dArgs {
         }
         if let Some(n) = self.place_spp {
             check_spp("--place-spp", n, volcache::limits::MAX_SPP)?;
+            anyhow::ensure!(
+                n <= image.spp,
+                "--place-spp {n} is more than the image's {} camera samples per pixel",
+                image.spp
+            );
             cp.place_spp = Some(n);
         }
         if let Some(d) = self.image_march_step {

@@ -3,8 +3,9 @@
 //! record and, in 3D, the camera samples per pixel, so that a user who wants a
 //! better image asks for more budget and the schedule spends it where the error
 //! model says it pays. Beside the model, a budget samples the straight light per
-//! point (2D: [`flatland_direct_share`]; 3D: [`VOLUME_DIRECT_SAMPLES`]) and, in 2D,
-//! limits records' reach past edges ([`flatland_edge_reach`]).
+//! point (2D: [`flatland_direct_share`]; 3D: [`VOLUME_DIRECT_SAMPLES`]), in 2D
+//! limits records' reach past edges ([`flatland_edge_reach`]) and in 3D places
+//! records over one camera sample in eight ([`VOLUME_PLACED_SHARE`]).
 //!
 //! The error model: the squared error is a sum of terms, each a power of one knob,
 //! - the interpolation error ∝ ε^p, its square A ε^{2p}, with records K ∝ ε^−q;
