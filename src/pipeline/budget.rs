@@ -12,8 +12,10 @@
 //! - the records' noise, C / rays (Monte Carlo);
 //! - in 3D, the camera samples' noise, D / spp (the pixel's footprint, the first
 //!   surface's light and the march are sampled per camera sample), whose cost
-//!   grows as spp^s (the placement visits every camera sample's march points and
-//!   places more records for them; the image's own cost is linear in spp).
+//!   grows as spp^s (s measured while the placement visited every camera
+//!   sample's march points and placed more records for them; since a budget
+//!   places over one in eight, the image's own cost, linear in spp, is most of
+//!   it, and s has not been re-fitted).
 //!
 //! The placement's time is ∝ K · rays. Minimising the sum at a cost T ∝
 //! ε^−q · rays · spp^s, Lagrange's condition makes every term fall alike, as
