@@ -169,6 +169,17 @@ fn records_can_be_placed_over_fewer_camera_samples_than_the_image_takes() {
         two["cache"]["uncovered"]
     );
     assert!(a.is_finite() && b.is_finite() && (b / a - 1.0).abs() < 0.01, "{a} {b}");
+    // The samples beyond the placed ones split adaptively: the summary says how,
+    // and as many are taken as cost what the six fine ones would have.
+    let split = run(&["--place-spp", "2", "--image-split", "adaptive"], "split");
+    let chosen = &split["cache"]["image_split"];
+    let c = mean(&split);
+    println!("adaptive split {chosen}: {} samples, mean luminance {c}", split["spp"]);
+    assert!(chosen["march_factor"].as_u64().is_some() && split["spp"].as_u64() >= Some(8));
+    // (Its camera samples are others than the fixed renders', whose mean moves by
+    // 7% between 8 and 16 samples here: unbiasedness is checked in
+    // tests/image_split_3d.rs against the render's own noise.)
+    assert!(c.is_finite() && c > 0.0, "{c}");
 }
 
 #[test]
@@ -236,6 +247,27 @@ fn bad_input_is_a_clear_error() {
             "1",
         ],
         "not both",
+    );
+    // An adaptive split needs camera samples beyond the placed ones, and chooses
+    // the march step itself.
+    fails_with(
+        &["render3d", s, "--method", "ours", "--image-split", "adaptive"],
+        "--image-split adaptive splits",
+    );
+    fails_with(
+        &[
+            "render3d",
+            s,
+            "--method",
+            "ours",
+            "--time-budget",
+            "5",
+            "--image-split",
+            "adaptive",
+            "--image-march-step",
+            "0.1",
+        ],
+        "--image-split adaptive chooses",
     );
     fails_with(&["render3d", s, "--method", "ours", "--eps", "nan"], "--eps");
     fails_with(

@@ -33,6 +33,13 @@ pub struct CacheSummary {
     /// (`--image-march-step`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub image_march_step: Option<f64>,
+    /// How the camera samples beyond the placed ones marched, when chosen from
+    /// the placed ones' statistics (`--image-split adaptive`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_split: Option<volcache::volume::image_split::ImageSplit>,
+    /// Every split those statistics predicted (variance and cost ratios).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub image_split_candidates: Vec<volcache::volume::image_split::ImageSplit>,
     pub surface_paths: u32,
     pub placement_seconds: f64,
     pub placement_rays: u64,

@@ -57,6 +57,14 @@ pub struct Cache3dArgs {
     /// per sample and as unbiased; whether it pays depends on the scene (README).
     #[arg(long)]
     pub image_march_step: Option<f64>,
+    /// How the camera samples beyond the placed ones march: `adaptive` takes the
+    /// march step (Δ, 2Δ, 4Δ or 8Δ) and straight-light samples (n, n/2, n/4) of
+    /// least variance × cost, measured on the placed samples, and without a time
+    /// budget as many samples as cost what --spp's rest would have at Δ; `fixed`
+    /// keeps --march-step (or --image-march-step). Default: adaptive with
+    /// --time-budget or --budget (unless --image-march-step), else fixed.
+    #[arg(long, value_enum)]
+    pub image_split: Option<ImageSplitArg>,
     /// Reflected-light samples per camera sample at the first surface.
     #[arg(long, default_value_t = 4)]
     pub surface_paths: u32,
@@ -105,6 +113,13 @@ pub struct Cache3dArgs {
 pub enum SurfaceCacheArg {
     None,
     Ours,
+}
+
+/// How the camera samples beyond the placed ones march (`--image-split`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ImageSplitArg {
+    Adaptive,
+    Fixed,
 }
 
 /// How `render3d` shares records between jobs.
@@ -178,6 +193,21 @@ impl Cache3dArgs {
             anyhow::ensure!(finite_pos(d), "--image-march-step must be a positive distance");
             cp.image_march_step = Some(d);
         }
+        cp.adapt_image = match self.image_split {
+            Some(ImageSplitArg::Adaptive) => {
+                anyhow::ensure!(
+                    self.image_march_step.is_none(),
+                    "--image-split adaptive chooses the march step of the camera samples beyond the placed ones: give it or --image-march-step, not both"
+                );
+                anyhow::ensure!(
+                    image.time_budget.is_some() || self.place_spp.is_some_and(|n| n < image.spp),
+                    "--image-split adaptive splits the camera samples beyond the placed ones: give --time-budget, or --place-spp below --spp"
+                );
+                true
+            }
+            Some(ImageSplitArg::Fixed) => false,
+            None => image.time_budget.is_some() && self.image_march_step.is_none(),
+        };
         if self.surface_cache == SurfaceCacheArg::Ours {
             let e = self.surface_eps.unwrap_or_else(|| default_surface_eps(scene));
             let (lo, hi) = volcache::limits::EPS;
@@ -325,6 +355,8 @@ pub fn run_cached(
         placed_spp: cp.placed_spp(),
         march_step: cp.march_step,
         image_march_step: cp.image_march_step,
+        image_split: None,
+        image_split_candidates: Vec::new(),
         surface_paths: cp.surface_paths,
         placement_seconds: placement.seconds,
         placement_rays: placement.rays,
@@ -358,6 +390,8 @@ pub fn run_cached(
     summary.reconstruction_seconds = r.image.seconds;
     summary.reconstruction_rays = r.image.rays;
     summary.uncovered = r.uncovered;
+    summary.image_split = r.split;
+    summary.image_split_candidates = r.split_candidates;
     let mut img = r.image;
     // The image's cost is the whole method's: placement (when it was done here, not
     // read from a file shared by tiles) plus reconstruction.

@@ -18,7 +18,7 @@ use super::dim::Dim;
 use super::lobe::{Lobe, phase_log_slope};
 use super::medium::pass_probability;
 use super::world::{Hit, SurfacePoint, VecOf, World, ignore};
-use crate::core::color::Rgb;
+use crate::core::color::{Rgb, luminance};
 use crate::core::free_flight::Flight;
 use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
@@ -458,15 +458,62 @@ pub fn direct_mean<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Rgb {
+    direct_spread(world, x, (lobe, scale), n, s, rays).0
+}
+
+/// What fewer samples of the straight light would have cost a point in variance:
+/// for the blocks of a [`direct_spread`] set (n/4 and n/2 samples when n divides),
+/// the added variance of one block's mean (luminance) instead of the set's mean.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DirectSpread {
+    /// (block size, added variance) for n/4 and n/2; None where n does not divide.
+    pub added: [Option<(u32, f64)>; 2],
+}
+
+/// [`direct_mean`], and the added variance of its set's aligned blocks of n/4
+/// and n/2 samples. A block drawn at random is an estimator of that many samples
+/// whose mean over blocks is the set's (the set is a scrambled Sobol' sequence,
+/// whose aligned blocks are stratified alike): by the law of total variance it
+/// adds the blocks' spread around the set's mean, measured here for free.
+pub fn direct_spread<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    (lobe, scale): (&Lobe<W::S>, Rgb),
+    n: u32,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> (Rgb, DirectSpread) {
     let n = n.max(1);
     // The n samples are one stratified set (their light and lobe draws spread
     // over the emitters' extent and the lobe): the visible part of an emitter is
     // a function with a few jumps, whose stratified estimate converges ~1/n.
     let set = s.next_u64();
-    let sum = (0..n).fold(Rgb::ZERO, |acc, k| {
-        acc + direct_at(world, x, lobe, None, &mut Sampler::stratified(set, k), rays)
-    });
-    sum * scale / n as f64
+    // Quarters (n divisible by 4) or halves (by 2) of the set, as block sums.
+    let (quarters, halves) = (n.is_multiple_of(4), n.is_multiple_of(2));
+    let mut blocks = [0.0f64; 4];
+    let mut sum = Rgb::ZERO;
+    for k in 0..n {
+        let v = direct_at(world, x, lobe, None, &mut Sampler::stratified(set, k), rays);
+        sum += v;
+        if halves {
+            let b = if quarters { 4 * k / n } else { 2 * (2 * k / n) };
+            blocks[b as usize] += luminance(v * scale);
+        }
+    }
+    let mean = sum * scale / n as f64;
+    let mut spread = DirectSpread::default();
+    if halves {
+        let m = luminance(mean);
+        let added = |sums: &[f64], size: u32| {
+            sums.iter().map(|b| (b / size as f64 - m).powi(2)).sum::<f64>() / sums.len() as f64
+        };
+        if quarters {
+            spread.added[0] = Some((n / 4, added(&blocks, n / 4)));
+        }
+        let half_sums = [blocks[0] + blocks[1], blocks[2] + blocks[3]];
+        spread.added[1] = Some((n / 2, added(&half_sums, n / 2)));
+    }
+    (mean, spread)
 }
 
 /// What to estimate at a point.

@@ -13,6 +13,7 @@ use crate::pipeline::placement::CountError;
 use crate::progress::Progress;
 use crate::study::seeds::pt_seed;
 use crate::volume::cached::{CacheSettings, CachedRenderParams, RecordInfo, RecordMemo, render_cached};
+use crate::volume::image_split::ImageSplit;
 use crate::volume::render::{RenderParams, Rendered, render};
 use crate::volume::scene::Scene;
 use serde::Serialize;
@@ -48,6 +49,10 @@ pub struct Run3d {
     /// covered, path traced instead (cache methods).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncovered: Option<u64>,
+    /// How the camera samples beyond the placed ones marched, when chosen from
+    /// the placed ones' statistics (`CachedRenderParams::adapt_image`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_split: Option<ImageSplit>,
     /// The budget that set ε, the directions and the camera samples (ours), or
     /// whose record count, directions and camera samples this run shares
     /// (jarosz08), in a budget sweep.
@@ -84,6 +89,7 @@ impl Run3d {
             placed_spp: None,
             image_march_step: None,
             uncovered: None,
+            image_split: None,
             budget: None,
             rays_per_record: None,
             direct_samples: None,
@@ -120,11 +126,12 @@ pub fn cache_run(
 ) -> Result<Run3d, CountError> {
     let r = render_cached(scene, cp, cs, target, memo, progress)?;
     let (placement, surfaces) = (r.placement, r.surfaces);
-    let uncovered = r.reconstruction.uncovered;
+    let (uncovered, split) = (r.reconstruction.uncovered, r.reconstruction.split);
     let mut run = Run3d::rendered(method_name(cs.method), r.reconstruction.image, reference);
     run.records = placement.record_count();
     run.placed_spp = (cp.placed_spp() < run.spp).then_some(cp.placed_spp());
     run.uncovered = Some(uncovered);
+    run.image_split = split;
     run.image_march_step = cp.image_march_step.filter(|_| run.placed_spp.is_some());
     run.eps = Some(placement.eps);
     run.rays_per_record = Some(cs.probe.rays);

@@ -44,6 +44,13 @@ pub struct CachedRenderParams {
     /// the pixel rather than along its rays.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub image_march_step: Option<f64>,
+    /// The camera samples beyond the placed ones take the march step and
+    /// straight-light samples of least variance × cost, measured on the placed
+    /// ones (`super::image_split`); without a time budget, as many as cost what
+    /// the remaining `image.spp` would have at `march_step`. (Left out of JSON
+    /// when false.)
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub adapt_image: bool,
 }
 
 /// The march step of camera rays unless given: the scene's size / 128.
@@ -60,6 +67,7 @@ impl CachedRenderParams {
             surface_eps: None,
             place_spp: None,
             image_march_step: None,
+            adapt_image: false,
         }
     }
 

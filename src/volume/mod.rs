@@ -13,6 +13,7 @@ pub mod cached;
 pub mod cached_params;
 pub mod camera;
 pub mod camera_march;
+pub mod image_split;
 pub mod lights;
 mod march_image;
 pub mod medium;

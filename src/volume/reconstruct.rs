@@ -10,7 +10,7 @@
 use super::cached_params::{CacheView, CachedRenderParams};
 use super::lights::Lobe;
 pub use super::march_image::Reconstruction;
-use super::march_image::march_image;
+use super::march_image::{PointLs, SplitMode, march_image};
 use super::mesh::Hit;
 use super::scene::Scene;
 use super::surface_cache::surface_radiance;
@@ -18,7 +18,7 @@ use crate::core::color::Rgb;
 use crate::core::rng::{Sampler, mix64};
 use crate::core::space::D3;
 use crate::pipeline::moments::{MomentQuery, weights_towards};
-use crate::pipeline::path::{direct_mean, radiance_leaving, sample_at};
+use crate::pipeline::path::{direct_spread, radiance_leaving, sample_at};
 use crate::pipeline::placement::{interpolate, interpolate_moments};
 use crate::pipeline::sight::near_table;
 use crate::pipeline::world::World;
@@ -61,46 +61,69 @@ pub fn reconstruct(
         });
         cached.unwrap_or_else(|| radiance_leaving(scene, hit, dir, paths, &params.image.settings, s, rays).1)
     };
-    march_image(scene, params, progress, surface, move |p, lobe, sigma_s, s, rays| {
-        let direct = match view.direct_samples {
-            // The records leave the straight light out: sampled here in full.
-            Some(n) => direct_mean(scene, p, (lobe, sigma_s), n, s, rays),
-            None => scene.direct_part(p, lobe, s, rays) * sigma_s,
-        };
-        let cached = match (view.moments, lobe) {
-            (Some(table), Lobe::Phase { travel, .. }) => {
-                if weights.0 != *travel || weights.1.is_empty() {
-                    let bands = (table[0].moments.len() as f64).sqrt().round() as usize - 1;
-                    weights = (*travel, weights_towards::<D3>(g, bands, -*travel));
+    let mode = match params.adapt_image {
+        true => SplitMode::Adaptive {
+            direct: view.direct_samples,
+        },
+        false => SplitMode::Fixed,
+    };
+    march_image(
+        scene,
+        params,
+        mode,
+        progress,
+        surface,
+        move |p, lobe, sigma_s, n, s, rays| {
+            let before = *rays;
+            let (direct, spread) = match view.direct_samples {
+                // The records leave the straight light out: sampled here in full.
+                Some(own) => {
+                    let (d, spread) = direct_spread(scene, p, (lobe, sigma_s), n.unwrap_or(own), s, rays);
+                    (d, Some(spread))
                 }
-                let query = MomentQuery {
-                    weights: &weights.1,
-                    omega_o: -*travel,
-                    g,
-                };
-                interpolate_moments(
-                    scene,
-                    (cache, &near),
-                    table,
-                    &query,
-                    p,
-                    second_order,
-                    &mut scratch,
-                    rays,
-                )
+                None => (scene.direct_part(p, lobe, s, rays) * sigma_s, None),
+            };
+            let direct_rays = *rays - before;
+            let cached = match (view.moments, lobe) {
+                (Some(table), Lobe::Phase { travel, .. }) => {
+                    if weights.0 != *travel || weights.1.is_empty() {
+                        let bands = (table[0].moments.len() as f64).sqrt().round() as usize - 1;
+                        weights = (*travel, weights_towards::<D3>(g, bands, -*travel));
+                    }
+                    let query = MomentQuery {
+                        weights: &weights.1,
+                        omega_o: -*travel,
+                        g,
+                    };
+                    interpolate_moments(
+                        scene,
+                        (cache, &near),
+                        table,
+                        &query,
+                        p,
+                        second_order,
+                        &mut scratch,
+                        rays,
+                    )
+                }
+                _ => interpolate(scene, (cache, &near), p, second_order, &mut scratch, rays),
+            };
+            match cached {
+                Some(c) => PointLs {
+                    value: direct + c,
+                    covered: true,
+                    direct: spread,
+                    direct_rays,
+                },
+                // Not covered (a camera sample beyond the placed ones, or a tile read from
+                // another window's records): path traced, all parts, and counted.
+                None => PointLs {
+                    value: sample_at(scene, p, lobe, None, Rgb::ONE, settings, s, rays).total() * sigma_s,
+                    ..PointLs::default()
+                },
             }
-            _ => interpolate(scene, (cache, &near), p, second_order, &mut scratch, rays),
-        };
-        match cached {
-            Some(c) => (direct + c, true),
-            // Not covered (a camera sample beyond the placed ones, or a tile read from
-            // another window's records): path traced, all parts, and counted.
-            None => (
-                sample_at(scene, p, lobe, None, Rgb::ONE, settings, s, rays).total() * sigma_s,
-                false,
-            ),
-        }
-    })
+        },
+    )
 }
 
 /// The same image with L_s path traced at every march point (`paths` samples, all
@@ -120,13 +143,24 @@ pub fn march_reference(
     let surface = |hit: &Hit, dir: DVec3, s: &mut Sampler, rays: &mut u64| {
         radiance_leaving(scene, hit, dir, params.surface_paths, &params.image.settings, s, rays).1
     };
-    march_image(scene, params, progress, surface, |p, lobe, sigma_s, _, rays| {
-        let point = mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits())));
-        let mut s = Sampler::new(path_seed, point);
-        let mut sum = Rgb::ZERO;
-        for _ in 0..paths {
-            sum += sample_at(scene, p, lobe, None, Rgb::ONE, &params.image.settings, &mut s, rays).total();
-        }
-        (sum * sigma_s / paths as f64, true)
-    })
+    march_image(
+        scene,
+        params,
+        SplitMode::Fixed,
+        progress,
+        surface,
+        |p, lobe, sigma_s, _, _, rays| {
+            let point = mix64(p.x.to_bits() ^ mix64(p.y.to_bits() ^ mix64(p.z.to_bits())));
+            let mut s = Sampler::new(path_seed, point);
+            let mut sum = Rgb::ZERO;
+            for _ in 0..paths {
+                sum += sample_at(scene, p, lobe, None, Rgb::ONE, &params.image.settings, &mut s, rays).total();
+            }
+            PointLs {
+                value: sum * sigma_s / paths as f64,
+                covered: true,
+                ..PointLs::default()
+            }
+        },
+    )
 }

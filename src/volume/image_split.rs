@@ -1,0 +1,315 @@
+//! How the camera samples beyond the placed ones are taken, chosen from the placed
+//! samples' own statistics: a coarser march (step K·Δ) and fewer samples of the
+//! straight light per march point make a camera sample cheaper and noisier; which
+//! pays depends on the scene (a staircase's god rays, a lamp's halo, open fog), so
+//! it is measured per render rather than fixed (efficiency-aware splitting, as in
+//! Rath et al. 2022: minimise variance × cost).
+//!
+//! Both costs are measured for free on the placed samples, which march at Δ with
+//! the view's n straight-light samples:
+//! - the coarse march with offset (j + ξ)/K visits exactly the fine march's points
+//!   n ≡ j (mod K), weighted K·Δ; its estimators' mean over j is the fine one, so
+//!   (law of total variance) the coarse march adds their spread around it;
+//! - n/4 or n/2 straight-light samples: the added variance of an aligned block of
+//!   the point's set ([`DirectSpread`]), K·Σ (T w Δ)² of it along the ray.
+//!
+//! Cost is counted in rays (deterministic, unlike seconds) plus [`POINT_COST`] per
+//! march point; every statistic is summed per pixel in sample order, then over the
+//! pixels in order, so the choice does not depend on the thread count.
+
+use crate::core::color::Rgb;
+use crate::core::color::luminance;
+use crate::pipeline::path::DirectSpread;
+use serde::{Deserialize, Serialize};
+
+/// The march factors K tried (step K·Δ).
+pub const MARCH_FACTORS: [u32; 4] = [1, 2, 4, 8];
+
+/// A march point's own cost in rays beyond the rays it traces (the records'
+/// lookup and weights, transmittance, the sampler): measured on the staircase and
+/// fog_box, a point that traced no ray took about the time of one ray.
+pub const POINT_COST: f64 = 1.0;
+
+/// At most this many times the fine samples' count is taken at equal cost (a
+/// sample the statistics call nearly free must not multiply the image's time).
+pub const MAX_SAMPLE_GAIN: f64 = 16.0;
+
+/// What the camera samples beyond the placed ones take, and what the placed
+/// samples predicted for it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImageSplit {
+    /// March step K·Δ.
+    pub march_factor: u32,
+    /// Straight-light samples per march point (None: the records hold that light).
+    pub direct_samples: Option<u32>,
+    /// Predicted variance of a camera sample, relative to the fine march's: of the
+    /// image, and of its medium part.
+    pub variance_ratio: f64,
+    pub medium_variance_ratio: f64,
+    /// Predicted cost of a camera sample, relative to the fine march's.
+    pub cost_ratio: f64,
+}
+
+impl ImageSplit {
+    /// The fine march with `direct` samples: what the placed samples take.
+    pub fn fine(direct: Option<u32>) -> Self {
+        ImageSplit {
+            march_factor: 1,
+            direct_samples: direct,
+            variance_ratio: 1.0,
+            medium_variance_ratio: 1.0,
+            cost_ratio: 1.0,
+        }
+    }
+}
+
+/// One camera sample's march, as it is walked: the coarse estimators' sums.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MarchSpread {
+    /// Σ luminance of each point's contribution T w Δ L_s (the fine estimate).
+    fine: f64,
+    /// Per K = 2, 4, 8 (slots 0..2, 2..6, 6..14): K × Σ over points n ≡ j (mod K).
+    coarse: [f64; 14],
+    /// Σ (T w Δ)² × added variance of n/4 and n/2 straight-light samples.
+    direct_added: [f64; 2],
+    point_rays: f64,
+    direct_rays: f64,
+}
+
+impl MarchSpread {
+    /// Point `n` contributed `c` (T w Δ L_s) with straight-light spread `direct`
+    /// (scaled by (T w Δ)² = `scale²`), tracing `rays` of which `direct_rays` for
+    /// the straight light.
+    pub fn add(
+        &mut self,
+        n: usize,
+        c: Rgb,
+        (scale, direct): (f64, Option<DirectSpread>),
+        (rays, direct_rays): (u64, u64),
+    ) {
+        let y = luminance(c);
+        self.fine += y;
+        let mut slot = 0;
+        for k in [2usize, 4, 8] {
+            self.coarse[slot + n % k] += k as f64 * y;
+            slot += k;
+        }
+        if let Some(d) = direct {
+            for (acc, a) in self.direct_added.iter_mut().zip(d.added) {
+                *acc += a.map_or(0.0, |(_, v)| scale * scale * v);
+            }
+        }
+        self.point_rays += (rays - direct_rays) as f64 + POINT_COST;
+        self.direct_rays += direct_rays as f64;
+    }
+}
+
+/// A pixel's statistics over its placed camera samples.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PixelSpread {
+    samples: u32,
+    /// Σ and Σ² of the samples' total luminance, and of their medium part's.
+    y: (f64, f64),
+    y_medium: (f64, f64),
+    /// Σ over samples of the coarse march's added variance, K = 2, 4, 8.
+    march_added: [f64; 3],
+    direct_added: [f64; 2],
+    /// Σ over samples of the rays before the march, along it (lookups, path
+    /// traced points) and of the straight light.
+    fixed_rays: f64,
+    point_rays: f64,
+    direct_rays: f64,
+}
+
+impl PixelSpread {
+    /// One camera sample: its total and medium part, the rays it traced before
+    /// marching, its march.
+    pub fn add(&mut self, (total, medium): (Rgb, Rgb), fixed_rays: u64, m: &MarchSpread) {
+        let (y, ym) = (luminance(total), luminance(medium));
+        self.samples += 1;
+        self.y = (self.y.0 + y, self.y.1 + y * y);
+        self.y_medium = (self.y_medium.0 + ym, self.y_medium.1 + ym * ym);
+        let mut slot = 0;
+        for (i, k) in [2usize, 4, 8].into_iter().enumerate() {
+            let spread: f64 = m.coarse[slot..slot + k].iter().map(|e| (e - m.fine).powi(2)).sum();
+            self.march_added[i] += spread / k as f64;
+            slot += k;
+        }
+        for i in 0..2 {
+            self.direct_added[i] += m.direct_added[i];
+        }
+        self.fixed_rays += fixed_rays as f64;
+        self.point_rays += m.point_rays;
+        self.direct_rays += m.direct_rays;
+    }
+}
+
+/// The (K, straight-light samples) of least variance × cost over the window's
+/// pixels, their placed samples marched at Δ with `direct` straight-light samples
+/// (candidates n/4, n/2, n where n divides). Returns it and every candidate
+/// ([`candidates`]).
+pub fn choose(pixels: &[PixelSpread], direct: Option<u32>) -> (ImageSplit, Vec<ImageSplit>) {
+    let all = candidates(pixels, direct);
+    // Both the image and its medium part must gain: the added variance is all the
+    // medium's, so the worse ratio is (nearly always) the medium part's, whose
+    // error the cache is compared by; the image gains at least as much.
+    let product = |s: &ImageSplit| s.variance_ratio.max(s.medium_variance_ratio) * s.cost_ratio;
+    let best = all.iter().copied().fold(ImageSplit::fine(direct), |best, c| {
+        if product(&c) < product(&best) { c } else { best }
+    });
+    (best, all)
+}
+
+/// Every (K, straight-light samples) with its predicted variance and cost ratios,
+/// the fine march first (none when the statistics are not finite). Sums run over
+/// the pixels in order.
+pub fn candidates(pixels: &[PixelSpread], direct: Option<u32>) -> Vec<ImageSplit> {
+    let mut total = PixelSpread::default();
+    // The pixels' own sample variances, of the total and of the medium part: what
+    // every choice starts from (none is known with one sample: then only the
+    // added variance is weighed, which favours the fine march).
+    let (mut base, mut base_medium) = (0.0, 0.0);
+    let variance = |(s, s2): (f64, f64), n: f64| ((s2 - s * s / n) / (n - 1.0)).max(0.0);
+    for p in pixels.iter().filter(|p| p.samples > 0) {
+        let n = p.samples as f64;
+        if ![p.y.0, p.y.1, p.y_medium.0, p.y_medium.1].iter().all(|v| v.is_finite()) {
+            return Vec::new();
+        }
+        if p.samples > 1 {
+            base += variance(p.y, n);
+            base_medium += variance(p.y_medium, n);
+        }
+        for i in 0..3 {
+            total.march_added[i] += p.march_added[i] / n;
+        }
+        for i in 0..2 {
+            total.direct_added[i] += p.direct_added[i] / n;
+        }
+        total.fixed_rays += p.fixed_rays / n;
+        total.point_rays += p.point_rays / n;
+        total.direct_rays += p.direct_rays / n;
+    }
+    let fine_cost = total.fixed_rays + total.point_rays + total.direct_rays;
+    if !(fine_cost > 0.0
+        && total
+            .march_added
+            .iter()
+            .chain(&total.direct_added)
+            .all(|a| a.is_finite()))
+    {
+        return Vec::new();
+    }
+    // Candidates for the straight light: (samples, fraction of n, added variance).
+    let mut lights = vec![(direct, 1.0, 0.0)];
+    if let Some(n) = direct {
+        if n % 4 == 0 {
+            lights.push((Some(n / 4), 0.25, total.direct_added[0]));
+        }
+        if n % 2 == 0 {
+            lights.push((Some(n / 2), 0.5, total.direct_added[1]));
+        }
+    }
+    // (A zero variance stays so only if nothing is added: a black image takes the
+    // cheapest split that adds nothing.)
+    let ratio = |v: f64, fine: f64| match (v > 0.0, fine > 0.0) {
+        (_, true) => v / fine,
+        (true, false) => f64::INFINITY,
+        (false, false) => 1.0,
+    };
+    let mut all = Vec::new();
+    for (i, &k) in MARCH_FACTORS.iter().enumerate() {
+        let march_added = if i == 0 { 0.0 } else { total.march_added[i - 1] };
+        for &(samples, share, direct_added) in &lights {
+            let added = march_added + k as f64 * direct_added;
+            all.push(ImageSplit {
+                march_factor: k,
+                direct_samples: samples,
+                variance_ratio: ratio(base + added, base),
+                medium_variance_ratio: ratio(base_medium + added, base_medium),
+                cost_ratio: (total.fixed_rays + (total.point_rays + share * total.direct_rays) / k as f64) / fine_cost,
+            });
+        }
+    }
+    all
+}
+
+/// Camera samples of `split` costing what `fine` fine samples cost (at least one
+/// each, at most [`MAX_SAMPLE_GAIN`] times as many).
+pub fn equal_cost_samples(fine: u32, split: &ImageSplit) -> u32 {
+    let gain = (1.0 / split.cost_ratio).clamp(1.0, MAX_SAMPLE_GAIN);
+    ((fine as f64 * gain).round() as u32).max(fine)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pixel(samples: u32, var: f64, march: [f64; 3], direct: [f64; 2], rays: (f64, f64, f64)) -> PixelSpread {
+        let n = samples as f64;
+        PixelSpread {
+            samples,
+            // Σy = 0 and Σy² = (n−1)·var give a sample variance of var.
+            y: (0.0, (n - 1.0) * var),
+            y_medium: (0.0, (n - 1.0) * var / 2.0),
+            march_added: march.map(|a| a * n),
+            direct_added: direct.map(|a| a * n),
+            fixed_rays: rays.0 * n,
+            point_rays: rays.1 * n,
+            direct_rays: rays.2 * n,
+        }
+    }
+
+    /// A march whose coarse estimators agree with the fine one (smooth light along
+    /// the ray) and whose straight light is nearly noise-free is taken at K = 8
+    /// with n/4 samples; one whose coarse estimators spread far stays fine.
+    #[test]
+    fn the_choice_weighs_added_variance_against_cost() {
+        let smooth = vec![pixel(8, 1.0, [0.01, 0.02, 0.04], [0.001, 0.0005], (10.0, 40.0, 160.0)); 4];
+        let s = choose(&smooth, Some(4)).0;
+        assert_eq!((s.march_factor, s.direct_samples), (8, Some(1)), "{s:?}");
+        assert!(s.cost_ratio < 0.1 && s.variance_ratio < 1.1, "{s:?}");
+        let sharp = vec![pixel(8, 1.0, [3.0, 9.0, 27.0], [2.0, 1.0], (10.0, 40.0, 160.0)); 4];
+        assert_eq!(choose(&sharp, Some(4)).0, ImageSplit::fine(Some(4)));
+        // Without straight-light samples only K is chosen.
+        let s = choose(&smooth, None).0;
+        assert_eq!((s.march_factor, s.direct_samples), (8, None));
+        // Non-finite statistics keep the fine march.
+        let bad = vec![pixel(8, f64::NAN, [0.0; 3], [0.0; 2], (1.0, 1.0, 1.0))];
+        assert_eq!(choose(&bad, Some(4)), (ImageSplit::fine(Some(4)), Vec::new()));
+        assert_eq!(choose(&[], Some(4)).0, ImageSplit::fine(Some(4)));
+    }
+
+    /// The coarse march's added variance is the spread of the subset estimators:
+    /// eight points alternating 0, 1 have coarse estimators (K = 2) 0 and 8
+    /// around the fine 4, so they add 16; constant points add nothing.
+    #[test]
+    fn march_spread_is_the_subsets_spread() {
+        let mut m = MarchSpread::default();
+        for n in 0..8 {
+            m.add(n, Rgb::splat(if n % 2 == 0 { 0.0 } else { 1.0 }), (1.0, None), (2, 0));
+        }
+        let mut p = PixelSpread::default();
+        p.add((Rgb::splat(4.0), Rgb::splat(4.0)), 3, &m);
+        assert!((p.march_added[0] - 16.0).abs() < 1e-12, "{:?}", p.march_added);
+        assert_eq!(p.fixed_rays, 3.0);
+        assert_eq!(p.point_rays, 8.0 * (2.0 + POINT_COST));
+        let mut flat = MarchSpread::default();
+        for n in 0..8 {
+            flat.add(n, Rgb::splat(0.5), (1.0, None), (1, 0));
+        }
+        let mut q = PixelSpread::default();
+        q.add((Rgb::splat(4.0), Rgb::splat(4.0)), 0, &flat);
+        assert!(q.march_added.iter().all(|a| a.abs() < 1e-24), "{:?}", q.march_added);
+    }
+
+    #[test]
+    fn equal_cost_samples_are_bounded() {
+        let s = |c| ImageSplit {
+            cost_ratio: c,
+            ..ImageSplit::fine(None)
+        };
+        assert_eq!(equal_cost_samples(56, &s(0.25)), 224);
+        assert_eq!(equal_cost_samples(56, &s(1e-9)), 56 * 16);
+        assert_eq!(equal_cost_samples(56, &s(2.0)), 56);
+    }
+}
