@@ -228,6 +228,29 @@ fn render3d_takes_a_budget() {
     assert_eq!(s["cache"]["image_march_step"], 0.5);
     assert!(s["cache"].get("image_split").is_none(), "{s}");
     assert_eq!(s["spp"], b.spp);
+    // Placing over every camera sample leaves none to split: no split, no error.
+    let all = b.spp.to_string();
+    let s = render(
+        &scene,
+        &d.path().join("ok2"),
+        &[
+            "--method",
+            "ours",
+            "--budget",
+            "0.0625",
+            "--place-spp",
+            &all,
+            "--res",
+            "4x3",
+            "--steps",
+            "2",
+        ],
+    );
+    assert!(s["cache"].get("image_split").is_none(), "{s}");
+    assert_eq!(
+        (s["spp"].as_u64(), s["cache"]["placed_spp"].as_u64()),
+        (Some(b.spp as u64), Some(b.spp as u64))
+    );
     for (args, says) in [
         (vec!["--budget", "1e5"], "--budget must lie between"),
         (vec!["--budget", "nan"], "--budget must lie between"),

@@ -10,7 +10,7 @@
 //! method's time to 3%, 1% and 0.3% relative RMSE ([`volcache::study::targets`]).
 
 use super::common::{ProgressUi, check_range, wrote};
-use super::render3d_cache::{Cache3dArgs, ImageSplitArg};
+use super::render3d_cache::Cache3dArgs;
 use super::setup3d::{CachePoint, Setup3dArgs, run_cache, setup3d};
 use clap::Args;
 use serde::Serialize;
@@ -120,22 +120,16 @@ pub fn run(a: Tradeoff3dArgs) -> anyhow::Result<ExitCode> {
                         Some(k) => format!("budget {b} (at {k} records)"),
                         None => format!("budget {b}"),
                     };
+                    // Both methods with the budget's straight-light samples, placed
+                    // camera samples (a search probe walks only those) and split.
+                    let mut cache = Cache3dArgs {
+                        eps,
+                        rays: s.rays,
+                        ..a.cache.clone()
+                    };
+                    cache.budget_defaults(&s);
                     let point = CachePoint {
-                        // (Both methods with the budget's straight-light samples and
-                        // placed camera samples: a search probe walks only those.)
-                        cache: Cache3dArgs {
-                            eps,
-                            rays: s.rays,
-                            direct_samples: a.cache.direct_samples.or(Some(s.direct_samples)),
-                            place_spp: a.cache.place_spp.or(Some(s.place_spp)),
-                            // As render3d --budget: the rest of the image split adaptively.
-                            image_split: a
-                                .cache
-                                .image_split
-                                .or((a.cache.image_march_step.is_none() && s.place_spp < s.spp)
-                                    .then_some(ImageSplitArg::Adaptive)),
-                            ..a.cache.clone()
-                        },
+                        cache,
                         image: RenderParams {
                             spp: s.spp,
                             ..image.clone()

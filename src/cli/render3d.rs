@@ -14,7 +14,7 @@ use super::image3d::{
     CacheSummary, Summary3d, mean_luminance, medium_path, output_paths, parse_crop, parse_tile, reference_errors,
     set_window, write_outputs,
 };
-use super::render3d_cache::{Cache3dArgs, ImageSplitArg, RecordsArgs, run_cached};
+use super::render3d_cache::{Cache3dArgs, RecordsArgs, run_cached};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -196,11 +196,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
         );
         let s = budget_settings(&scene, b);
         (cache.eps, cache.rays, params.spp) = (Some(s.eps), s.rays, s.spp);
-        cache.direct_samples.get_or_insert(s.direct_samples);
-        cache.place_spp.get_or_insert(s.place_spp);
-        if cache.image_march_step.is_none() && s.place_spp < s.spp {
-            cache.image_split.get_or_insert(ImageSplitArg::Adaptive);
-        }
+        cache.budget_defaults(&s);
     } else if let Some(s) = a.spp {
         check_spp("--spp", s, limits::MAX_SPP)?;
         params.spp = s;

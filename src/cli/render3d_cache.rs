@@ -10,8 +10,8 @@ use volcache::output::write_json;
 use volcache::pipeline::record::Cached;
 use volcache::progress::Progress;
 use volcache::volume::cached::{
-    CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, image_after, place,
-    place_surfaces, place_with_count, reconstruct,
+    BudgetSettings, CacheSettings, CacheView, CachedRenderParams, Placement, RecordMemo, default_eps, image_after,
+    place, place_surfaces, place_with_count, reconstruct,
 };
 use volcache::volume::cached_params::SurfaceCache;
 use volcache::volume::records_file::{Loaded, RecordsFile, ValidFor};
@@ -138,6 +138,18 @@ pub struct RecordsArgs {
 }
 
 impl Cache3dArgs {
+    /// What a budget sets beside the options given (`render3d --budget`, `bench
+    /// tradeoff3d --budgets`): its straight-light samples and placed camera samples
+    /// unless given, and the adaptive split of the camera samples beyond the placed
+    /// ones when there are some and no --image-march-step.
+    pub fn budget_defaults(&mut self, s: &BudgetSettings) {
+        self.direct_samples.get_or_insert(s.direct_samples);
+        let placed = *self.place_spp.get_or_insert(s.place_spp);
+        if self.image_march_step.is_none() && placed < s.spp {
+            self.image_split.get_or_insert(ImageSplitArg::Adaptive);
+        }
+    }
+
     /// Cache and march settings for `method` on `scene`, checked.
     pub fn settings(
         &self,
