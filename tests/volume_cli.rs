@@ -180,6 +180,18 @@ fn records_can_be_placed_over_fewer_camera_samples_than_the_image_takes() {
     // 7% between 8 and 16 samples here: unbiasedness is checked in
     // tests/image_split_3d.rs against the render's own noise.)
     assert!(c.is_finite() && c > 0.0, "{c}");
+    // One camera sample in four beyond the placed ones marches when asked; the
+    // summary says so and the adaptive split's table predicts the shares.
+    let share = run(&["--place-spp", "2", "--image-march-every", "4"], "share");
+    assert_eq!(
+        share["cache"]["image_march_every"].as_u64(),
+        Some(4),
+        "{}",
+        share["cache"]
+    );
+    assert!(mean(&share).is_finite() && mean(&share) > 0.0);
+    let table = split["cache"]["image_split_candidates"].as_array().unwrap();
+    assert!(table.iter().any(|c| c["march_every"].as_u64() == Some(4)), "{table:?}");
 }
 
 #[test]
@@ -266,6 +278,40 @@ fn bad_input_is_a_clear_error() {
             "adaptive",
             "--image-march-step",
             "0.1",
+        ],
+        "--image-split adaptive chooses",
+    );
+    // A march share needs samples beyond the placed ones, a count in range, and
+    // is not chosen beside an adaptive split.
+    fails_with(
+        &["render3d", s, "--method", "ours", "--image-march-every", "4"],
+        "--image-march-every sets",
+    );
+    fails_with(
+        &[
+            "render3d",
+            s,
+            "--method",
+            "ours",
+            "--place-spp",
+            "1",
+            "--image-march-every",
+            "0",
+        ],
+        "--image-march-every must be",
+    );
+    fails_with(
+        &[
+            "render3d",
+            s,
+            "--method",
+            "ours",
+            "--place-spp",
+            "1",
+            "--image-split",
+            "adaptive",
+            "--image-march-every",
+            "2",
         ],
         "--image-split adaptive chooses",
     );

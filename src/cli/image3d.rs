@@ -33,6 +33,10 @@ pub struct CacheSummary {
     /// (`--image-march-step`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub image_march_step: Option<f64>,
+    /// One camera sample in this many beyond the placed ones marched
+    /// (`--image-march-every`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_march_every: Option<u32>,
     /// How the camera samples beyond the placed ones marched, when chosen from
     /// the placed ones' statistics (`--image-split adaptive`).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -57,6 +57,14 @@ pub struct Cache3dArgs {
     /// per sample and as unbiased; whether it pays depends on the scene (README).
     #[arg(long)]
     pub image_march_step: Option<f64>,
+    /// With --time-budget or --place-spp: only one in M of the camera samples
+    /// beyond the placed ones marches (runs of 8 consecutive samples, which
+    /// stratify the pixel, one run in M); the others sample the first surface alone, and the
+    /// medium part is the mean over the marched ones (cheaper surface samples
+    /// where the march is most of a sample's cost). `--image-split adaptive`
+    /// chooses M itself.
+    #[arg(long, value_name = "M")]
+    pub image_march_every: Option<u32>,
     /// How the camera samples beyond the placed ones march: `adaptive` takes the
     /// march step (Δ, 2Δ, 4Δ or 8Δ) and straight-light samples (n, n/2, n/4) of
     /// least variance × cost, measured on the placed samples, and without a time
@@ -145,7 +153,7 @@ impl Cache3dArgs {
     pub fn budget_defaults(&mut self, s: &BudgetSettings) {
         self.direct_samples.get_or_insert(s.direct_samples);
         let placed = *self.place_spp.get_or_insert(s.place_spp);
-        if self.image_march_step.is_none() && placed < s.spp {
+        if self.image_march_step.is_none() && self.image_march_every.is_none() && placed < s.spp {
             self.image_split.get_or_insert(ImageSplitArg::Adaptive);
         }
     }
@@ -205,11 +213,22 @@ impl Cache3dArgs {
             anyhow::ensure!(finite_pos(d), "--image-march-step must be a positive distance");
             cp.image_march_step = Some(d);
         }
+        if let Some(m) = self.image_march_every {
+            anyhow::ensure!(
+                image.time_budget.is_some() || self.place_spp.is_some(),
+                "--image-march-every sets which camera samples beyond the placed ones march: give --time-budget or --place-spp"
+            );
+            anyhow::ensure!(
+                (1..=1024).contains(&m),
+                "--image-march-every must be between 1 and 1024, got {m}"
+            );
+            cp.image_march_every = Some(m);
+        }
         cp.adapt_image = match self.image_split {
             Some(ImageSplitArg::Adaptive) => {
                 anyhow::ensure!(
-                    self.image_march_step.is_none(),
-                    "--image-split adaptive chooses the march step of the camera samples beyond the placed ones: give it or --image-march-step, not both"
+                    self.image_march_step.is_none() && self.image_march_every.is_none(),
+                    "--image-split adaptive chooses how the camera samples beyond the placed ones march: give it or --image-march-step / --image-march-every, not both"
                 );
                 anyhow::ensure!(
                     image.time_budget.is_some() || self.place_spp.is_some_and(|n| n < image.spp),
@@ -218,7 +237,7 @@ impl Cache3dArgs {
                 true
             }
             Some(ImageSplitArg::Fixed) => false,
-            None => image.time_budget.is_some() && self.image_march_step.is_none(),
+            None => image.time_budget.is_some() && self.image_march_step.is_none() && self.image_march_every.is_none(),
         };
         if self.surface_cache == SurfaceCacheArg::Ours {
             let e = self.surface_eps.unwrap_or_else(|| default_surface_eps(scene));
@@ -367,6 +386,7 @@ pub fn run_cached(
         placed_spp: cp.placed_spp(),
         march_step: cp.march_step,
         image_march_step: cp.image_march_step,
+        image_march_every: cp.image_march_every,
         image_split: None,
         image_split_candidates: Vec::new(),
         surface_paths: cp.surface_paths,

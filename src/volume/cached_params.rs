@@ -44,6 +44,12 @@ pub struct CachedRenderParams {
     /// the pixel rather than along its rays.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub image_march_step: Option<f64>,
+    /// One camera sample in this many beyond the placed ones marches (None: all);
+    /// the others see the first surface only, the medium part being averaged over
+    /// the marched ones: the surface's light is then sampled more often than the
+    /// medium's, for a fraction of a march's cost (`super::image_split`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub image_march_every: Option<u32>,
     /// The camera samples beyond the placed ones take the march step and
     /// straight-light samples of least variance × cost, measured on the placed
     /// ones (`super::image_split`); without a time budget, as many as cost what
@@ -67,6 +73,7 @@ impl CachedRenderParams {
             surface_eps: None,
             place_spp: None,
             image_march_step: None,
+            image_march_every: None,
             adapt_image: false,
         }
     }

@@ -16,6 +16,17 @@
 //! Cost is counted in rays (deterministic, unlike seconds) plus [`POINT_COST`] per
 //! march point; every statistic is summed per pixel in sample order, then over the
 //! pixels in order, so the choice does not depend on the thread count.
+//!
+//! The march share is predicted too (taken when a user asks,
+//! `CachedRenderParams::image_march_every`, not chosen: see [`choose`]): only one
+//! in m of the later camera samples marches (in runs, [`MARCH_RUN`]; the first
+//! surface is sampled by all of them, the medium part averaged over the marched
+//! ones). Where the march is most of a sample's cost and the first surface's
+//! light most of the pixel's variance (sunlit patches, emitters' edges), the
+//! image gains many surface samples for a few of the medium's. With N samples,
+//! N/m marched, N·Var = (V − V_m) + m·V_m (V the total's variance, V_m the medium
+//! part's: the surface's variance and its covariance with the medium are what the
+//! total has beyond the medium's).
 
 use crate::core::color::Rgb;
 use crate::core::color::luminance;
@@ -32,6 +43,9 @@ pub const MARCH_FACTORS: [u32; 4] = [1, 2, 4, 8];
 /// on a machine shared with other work; one outlier 1.43).
 pub const POINT_COST: f64 = 1.0;
 
+/// The march shares tried: one later camera sample in m marches.
+pub const MARCH_EVERY: [u32; 5] = [1, 2, 4, 8, 16];
+
 /// At most this many times the fine samples' count is taken at equal cost (a
 /// sample the statistics call nearly free must not multiply the image's time).
 pub const MAX_SAMPLE_GAIN: f64 = 16.0;
@@ -44,6 +58,10 @@ pub struct ImageSplit {
     pub march_factor: u32,
     /// Straight-light samples per march point (None: the records hold that light).
     pub direct_samples: Option<u32>,
+    /// One camera sample in this many marches (the others see the first surface
+    /// only).
+    #[serde(default = "one")]
+    pub march_every: u32,
     /// Predicted variance of a camera sample, relative to the fine march's: of the
     /// image, and of its medium part.
     pub variance_ratio: f64,
@@ -52,12 +70,17 @@ pub struct ImageSplit {
     pub cost_ratio: f64,
 }
 
+fn one() -> u32 {
+    1
+}
+
 impl ImageSplit {
     /// The fine march with `direct` samples: what the placed samples take.
     pub fn fine(direct: Option<u32>) -> Self {
         ImageSplit {
             march_factor: 1,
             direct_samples: direct,
+            march_every: 1,
             variance_ratio: 1.0,
             medium_variance_ratio: 1.0,
             cost_ratio: 1.0,
@@ -148,23 +171,35 @@ impl PixelSpread {
 
 /// The (K, straight-light samples) of least variance × cost over the window's
 /// pixels, their placed samples marched at Δ with `direct` straight-light samples
-/// (candidates n/4, n/2, n where n divides). Returns it and every candidate
-/// ([`candidates`]).
+/// (candidates n/4, n/2, n where n divides), every camera sample marching.
+/// Returns it and every candidate ([`candidates`], the march shares' included).
+///
+/// The variance weighed is the worse of the image's and the medium part's ratios:
+/// what a march adds is all the medium's, so the medium never pays for the
+/// image's gain. A march share (`CachedRenderParams::image_march_every`) trades
+/// the medium's variance for the first surface's instead, and is not chosen here:
+/// weighed by √(image ratio × medium ratio) × cost, at the budget test's panel
+/// scene it took one sample in two: at budget 1 the image's RMSE fell 18–37%
+/// (medium −15…+18%; seeds 6–9, equal rays), at budget 4 it moved −8…+40%, the
+/// image's error sitting there on a floor (≈ 0.009) more samples did not lower,
+/// so the error no longer fell with the budget. Its predictions are reported
+/// for a user to take it.
 pub fn choose(pixels: &[PixelSpread], direct: Option<u32>) -> (ImageSplit, Vec<ImageSplit>) {
     let all = candidates(pixels, direct);
-    // Both the image and its medium part must gain: the added variance is all the
-    // medium's, so the worse ratio is (nearly always) the medium part's, whose
-    // error the cache is compared by; the image gains at least as much.
     let product = |s: &ImageSplit| s.variance_ratio.max(s.medium_variance_ratio) * s.cost_ratio;
-    let best = all.iter().copied().fold(ImageSplit::fine(direct), |best, c| {
-        if product(&c) < product(&best) { c } else { best }
-    });
+    let best = all
+        .iter()
+        .copied()
+        .filter(|c| c.march_every == 1)
+        .fold(ImageSplit::fine(direct), |best, c| {
+            if product(&c) < product(&best) { c } else { best }
+        });
     (best, all)
 }
 
-/// Every (K, straight-light samples) with its predicted variance and cost ratios,
-/// the fine march first (none when the statistics are not finite). Sums run over
-/// the pixels in order.
+/// Every (K, straight-light samples, march share) with its predicted variance and
+/// cost ratios, the fine march first (none when the statistics are not finite).
+/// Sums run over the pixels in order.
 pub fn candidates(pixels: &[PixelSpread], direct: Option<u32>) -> Vec<ImageSplit> {
     let mut total = PixelSpread::default();
     // The pixels' own sample variances, of the total and of the medium part: what
@@ -219,20 +254,53 @@ pub fn candidates(pixels: &[PixelSpread], direct: Option<u32>) -> Vec<ImageSplit
         (false, false) => 1.0,
     };
     let mut all = Vec::new();
-    for (i, &k) in MARCH_FACTORS.iter().enumerate() {
-        let march_added = if i == 0 { 0.0 } else { total.march_added[i - 1] };
-        for &(samples, share, direct_added) in &lights {
-            let added = march_added + k as f64 * direct_added;
-            all.push(ImageSplit {
-                march_factor: k,
-                direct_samples: samples,
-                variance_ratio: ratio(base + added, base),
-                medium_variance_ratio: ratio(base_medium + added, base_medium),
-                cost_ratio: (total.fixed_rays + (total.point_rays + share * total.direct_rays) / k as f64) / fine_cost,
-            });
+    for m in MARCH_EVERY {
+        let mf = m as f64;
+        for (i, &k) in MARCH_FACTORS.iter().enumerate() {
+            let march_added = if i == 0 { 0.0 } else { total.march_added[i - 1] };
+            for &(samples, share, direct_added) in &lights {
+                // Per camera sample, the medium's variance is counted m times over.
+                let medium = base_medium + march_added + k as f64 * direct_added;
+                let march_cost = (total.point_rays + share * total.direct_rays) / k as f64;
+                all.push(ImageSplit {
+                    march_factor: k,
+                    direct_samples: samples,
+                    march_every: m,
+                    variance_ratio: ratio(base + medium - base_medium + (mf - 1.0) * medium, base),
+                    medium_variance_ratio: ratio(mf * medium, base_medium),
+                    cost_ratio: (total.fixed_rays + march_cost / mf) / fine_cost,
+                });
+            }
         }
     }
     all
+}
+
+/// The marched camera samples beyond the placed ones come in runs of this many
+/// consecutive ones, one run in every `march_every`: a pixel's camera samples are
+/// a scrambled Sobol' set, whose aligned runs of 2^j points stratify the pixel
+/// (a (0, j, 2)-net), while a stride (every m-th sample) would hold the marched
+/// ones to one m-th of it — unbiased only over many renders, and with a
+/// standard error that would not see it.
+pub const MARCH_RUN: u32 = 8;
+
+/// Whether camera sample `k` of a pixel marches: the `first` all do, then those
+/// of the runs ([`MARCH_RUN`]) that begin every `split.march_every` runs.
+pub fn marches(k: u32, first: u32, split: &ImageSplit) -> bool {
+    let period = split.march_every.max(1).saturating_mul(MARCH_RUN);
+    k < first || k % period < MARCH_RUN
+}
+
+/// Camera samples marched among the first `done` of a pixel ([`marches`]).
+pub fn marched_samples(done: u32, first: u32, split: &ImageSplit) -> u32 {
+    let period = split.march_every.max(1).saturating_mul(MARCH_RUN);
+    // Samples below n in a run: whole periods, then the start of the last.
+    let in_runs = |n: u32| n / period * MARCH_RUN + (n % period).min(MARCH_RUN);
+    if done <= first {
+        done
+    } else {
+        first + in_runs(done) - in_runs(first)
+    }
 }
 
 /// Camera samples of `split` costing what `fine` fine samples cost (at least one
@@ -302,6 +370,71 @@ mod tests {
         let mut q = PixelSpread::default();
         q.add((Rgb::splat(4.0), Rgb::splat(4.0)), 0, &flat);
         assert!(q.march_added.iter().all(|a| a.abs() < 1e-24), "{:?}", q.march_added);
+    }
+
+    /// The march share's predictions follow N·Var = (V − V_m) + m·V_m, the
+    /// medium's m·V_m, the cost fixed + march / m; the choice itself keeps every
+    /// sample marching.
+    #[test]
+    fn the_march_share_is_predicted() {
+        // A march no coarser step serves (its points disagree), 4% of the cost
+        // before it, the medium 5% of the variance.
+        let mut p = pixel(8, 1.0, [3.0, 9.0, 27.0], [0.0; 2], (4.0, 96.0, 0.0));
+        p.y_medium.1 = 7.0 * 0.05;
+        let (s, all) = choose(&vec![p; 3], None);
+        assert_eq!(s, ImageSplit::fine(None));
+        let m4 = all.iter().find(|c| c.march_every == 4 && c.march_factor == 1).unwrap();
+        assert!((m4.variance_ratio - (1.0 + 3.0 * 0.05)).abs() < 1e-12, "{m4:?}");
+        assert!((m4.medium_variance_ratio - 4.0).abs() < 1e-12, "{m4:?}");
+        assert!((m4.cost_ratio - (4.0 + 96.0 / 4.0) / 100.0).abs() < 1e-12, "{m4:?}");
+        assert_eq!(all.len(), MARCH_FACTORS.len() * MARCH_EVERY.len());
+    }
+
+    #[test]
+    fn marched_samples_follow_the_share() {
+        let every = |m| ImageSplit {
+            march_every: m,
+            ..ImageSplit::fine(None)
+        };
+        let s = every(4);
+        let marched: Vec<u32> = (0..70).filter(|&k| marches(k, 3, &s)).collect();
+        let runs: Vec<u32> = (0..8).chain(32..40).chain(64..70).collect();
+        assert_eq!(marched, runs);
+        for done in 0..100 {
+            assert_eq!(
+                marched_samples(done, 3, &s),
+                (0..done).filter(|&k| marches(k, 3, &s)).count() as u32
+            );
+        }
+        assert_eq!(marched_samples(9, 3, &every(1)), 9);
+    }
+
+    /// The marched samples stratify the pixel as all of them do: their positions
+    /// (the first two draws of a pixel's scrambled Sobol' set) fill every eighth
+    /// of it in x and in y alike. A stride (every fourth sample) would leave three
+    /// quarters of the pixel to the unmarched samples.
+    #[test]
+    fn the_marched_samples_stratify_the_pixel() {
+        use crate::pipeline::path::Sampling;
+        let s = ImageSplit {
+            march_every: 4,
+            ..ImageSplit::fine(None)
+        };
+        for pixel in 0..20u64 {
+            let (mut xs, mut ys) = ([0u32; 8], [0u32; 8]);
+            for k in (4..256).filter(|&k| marches(k, 4, &s)) {
+                let mut r = Sampling::Stratified.stream(7, pixel, k as u64);
+                xs[(r.next_f64() * 8.0) as usize] += 1;
+                ys[(r.next_f64() * 8.0) as usize] += 1;
+            }
+            // 60 marched samples beyond the first four: 7 or 8 in every eighth.
+            for counts in [xs, ys] {
+                assert!(
+                    counts.iter().all(|&c| (7..=8).contains(&c)),
+                    "pixel {pixel}: {counts:?}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -16,7 +16,7 @@
 
 use super::cached_params::CachedRenderParams;
 use super::camera_march::CameraRay;
-use super::image_split::{ImageSplit, MarchSpread, PixelSpread, choose, equal_cost_samples};
+use super::image_split::{ImageSplit, MarchSpread, PixelSpread, choose, equal_cost_samples, marched_samples, marches};
 use super::lights::Lobe;
 use super::mesh::Hit;
 use super::render::{Rendered, camera};
@@ -68,8 +68,36 @@ pub(super) struct PointLs {
     pub direct_rays: u64,
 }
 
-/// Σ total, Σ medium part, Σ luminance, Σ luminance² of a pixel's samples.
-type Pixel = (Rgb, Rgb, f64, f64);
+/// A pixel's sums: the light from the first surface over all its camera samples,
+/// the medium part over the marched ones, and the luminances' moments for its
+/// standard error.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pixel {
+    surface: Rgb,
+    medium: Rgb,
+    /// Σ, Σ² of the surface part's luminance (all samples).
+    ys: (f64, f64),
+    /// Σ, Σ² of the medium part's luminance, Σ of the surface part's and of their
+    /// product (marched samples).
+    ym: (f64, f64),
+    ys_marched: f64,
+    ysm: f64,
+}
+
+impl Pixel {
+    fn add(&mut self, surface: Rgb, medium: Option<Rgb>) {
+        let y = luminance(surface);
+        self.surface += surface;
+        self.ys = (self.ys.0 + y, self.ys.1 + y * y);
+        if let Some(m) = medium {
+            let ym = luminance(m);
+            self.medium += m;
+            self.ym = (self.ym.0 + ym, self.ym.1 + ym * ym);
+            self.ys_marched += y;
+            self.ysm += y * ym;
+        }
+    }
+}
 
 /// The image with L_o at the first surface from `surface(hit, direction, stream,
 /// rays)` and L_s(p) towards the camera from `l_s(p, phase lobe, σ_s, straight-light
@@ -91,7 +119,7 @@ where
     let cam = camera(scene, ip.width, ip.height);
     let [x0, y0, x1, y1] = ip.window();
     let (w, h) = (x1 - x0, y1 - y0);
-    let mut acc: Vec<Pixel> = vec![(Rgb::ZERO, Rgb::ZERO, 0.0, 0.0); w * h];
+    let mut acc: Vec<Pixel> = vec![Pixel::default(); w * h];
     let (mut rays, mut uncovered, mut done, mut per_sample) = (0u64, 0u64, 0u32, 0.0f64);
     let spp = ip.spp.max(1);
     let adaptive = matches!(mode, SplitMode::Adaptive { .. });
@@ -99,8 +127,12 @@ where
     let first = if split_passes { params.placed_spp() } else { spp };
     let mut split = match mode {
         SplitMode::Adaptive { direct } => ImageSplit::fine(direct),
-        SplitMode::Fixed => ImageSplit::fine(None),
+        SplitMode::Fixed => ImageSplit {
+            march_every: params.image_march_every.unwrap_or(1),
+            ..ImageSplit::fine(None)
+        },
     };
+    let placed = params.placed_spp();
     let (mut chosen, mut candidates) = (None, Vec::new());
     let mut end = spp;
     let mut passes = vec![(0, first)];
@@ -139,22 +171,21 @@ where
                         let at = (j * ip.width + i, k);
                         let mut march = MarchSpread::default();
                         let spread = spreads.is_some().then_some(&mut march);
-                        let (total, medium, missed, fixed) = camera_sample(
+                        let (at_surface, medium, missed, fixed) = camera_sample(
                             scene,
                             params,
                             &cam,
                             at,
-                            &split,
+                            (&split, marches(k, placed, &split)),
                             (&mut surface, &mut l_s),
                             spread,
                             &mut r,
                         );
-                        if let Some(sp) = spreads.as_deref_mut() {
-                            sp[x].add((total, medium), fixed, &march);
+                        if let (Some(sp), Some(m)) = (spreads.as_deref_mut(), medium) {
+                            sp[x].add((at_surface + m, m), fixed, &march);
                         }
                         u += missed;
-                        let y = luminance(total);
-                        *px = (px.0 + total, px.1 + medium, px.2 + y, px.3 + y * y);
+                        px.add(at_surface, medium);
                     }
                 }
                 progress.advance(1);
@@ -180,7 +211,7 @@ where
             passes = later_passes(first, end, ip.time_budget.is_some());
         }
     }
-    let mut image = finish(acc, (w, h), done.max(1));
+    let mut image = finish(acc, (w, h), (done.max(1), marched_samples(done, placed, &split).max(1)));
     image.rays = rays;
     image.seconds = start.elapsed().as_secs_f64();
     Ok(Reconstruction {
@@ -205,20 +236,21 @@ fn later_passes(first: u32, end: u32, doubling: bool) -> Vec<(u32, u32)> {
     v
 }
 
-/// One camera sample (`k` of full-image pixel `pixel`): its total, its medium part,
-/// its uncovered march points and the rays it traced before marching; its march's
-/// statistics into `spread` when given.
+/// One camera sample (`k` of full-image pixel `pixel`): the light from its first
+/// surface, its medium part (None when it does not march), its uncovered march
+/// points and the rays it traced before marching; its march's statistics into
+/// `spread` when given.
 #[allow(clippy::too_many_arguments)]
 fn camera_sample<G, F>(
     scene: &Scene,
     params: &CachedRenderParams,
     cam: &super::camera::Camera,
     (pixel, k): (usize, u32),
-    split: &ImageSplit,
+    (split, march): (&ImageSplit, bool),
     (surface, l_s): (&mut G, &mut F),
     mut spread: Option<&mut MarchSpread>,
     rays: &mut u64,
-) -> (Rgb, Rgb, u64, u64)
+) -> (Rgb, Option<Rgb>, u64, u64)
 where
     G: FnMut(&Hit, DVec3, &mut Sampler, &mut u64) -> Rgb,
     F: FnMut(DVec3, &Lobe, Rgb, Option<u32>, &mut Sampler, &mut u64) -> PointLs,
@@ -243,6 +275,9 @@ where
             None => scene.escaped(ray.dir, None),
         };
     let fixed = *rays - rays_before;
+    if !march {
+        return (at_surface, None, 0, fixed);
+    }
     let (mut medium, mut uncovered) = (Rgb::ZERO, 0u64);
     if let Some(m) = &scene.medium {
         let step = match split.march_factor {
@@ -267,29 +302,73 @@ where
             }
         }
     }
-    (at_surface + medium, medium, uncovered, fixed)
+    (at_surface, Some(medium), uncovered, fixed)
 }
 
-/// The image of `n` samples per pixel from their sums.
-fn finish(acc: Vec<Pixel>, (w, h): (usize, usize), n: u32) -> Rendered {
-    let n = n as f64;
+/// The image of `n` samples per pixel, `n_marched` of them marched, from their
+/// sums: the surface part's mean over all, the medium part's over the marched
+/// ones. The standard error is that of this sum: Var(S)/n + Var(M)/n_marched +
+/// 2 Cov(S, M)/n (the marched samples are among all of them), each moment
+/// estimated over the samples that have it.
+fn finish(acc: Vec<Pixel>, (w, h): (usize, usize), (n, n_marched): (u32, u32)) -> Rendered {
+    let (nf, nm) = (n as f64, n_marched as f64);
     let mut image = Rendered {
         width: w,
         height: h,
         values: Vec::with_capacity(w * h),
         medium: Vec::with_capacity(w * h),
         std_error: Vec::with_capacity(w * h),
-        spp: n as u32,
+        spp: n,
         rays: 0,
         seconds: 0.0,
     };
-    for (total, medium, sy, sy2) in acc {
-        image.values.push(total / n);
-        image.medium.push(medium / n);
-        let mean = sy / n;
-        image
-            .std_error
-            .push(((sy2 / n - mean * mean).max(0.0) / (n - 1.0).max(1.0)).sqrt());
+    // The samples' (biased) second central moment, divided by count − 1: the
+    // squared standard error of their mean, as the path tracer's.
+    let spread = |(s, s2): (f64, f64), k: f64| (s2 / k - (s / k).powi(2)).max(0.0) / (k - 1.0).max(1.0);
+    for p in acc {
+        let medium = p.medium / nm;
+        image.values.push(p.surface / nf + medium);
+        image.medium.push(medium);
+        let cov = (p.ysm / nm - p.ys_marched / nm * p.ym.0 / nm) / (nm - 1.0).max(1.0) * nm / nf;
+        let se2 = spread(p.ys, nf) + spread(p.ym, nm) + 2.0 * cov;
+        image.std_error.push(se2.max(0.0).sqrt());
     }
     image
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With one sample in m marched, the pixel is the surface's mean over all
+    /// samples plus the medium's over the marched ones, and its standard error
+    /// that of this sum: checked against the moments computed directly.
+    #[test]
+    fn a_pixel_averages_each_part_over_its_own_samples() {
+        let surface = [0.3, 0.9, 0.1, 0.5, 0.7, 0.2, 0.4, 0.8];
+        let medium = [(0, 0.2), (3, 0.5), (6, 0.1)];
+        let mut p = Pixel::default();
+        for (k, s) in surface.iter().enumerate() {
+            let m = medium.iter().find(|(j, _)| *j == k).map(|(_, v)| Rgb::splat(*v));
+            p.add(Rgb::splat(*s), m);
+        }
+        let img = finish(vec![p], (1, 1), (8, 3));
+        let ms: f64 = surface.iter().sum::<f64>() / 8.0;
+        let mm: f64 = medium.iter().map(|(_, v)| v).sum::<f64>() / 3.0;
+        assert!((luminance(img.values[0]) - (ms + mm)).abs() < 1e-12);
+        assert!((luminance(img.medium[0]) - mm).abs() < 1e-12);
+        // Unbiased variances and covariance over the samples that have them.
+        let vs = surface.iter().map(|s| (s - ms).powi(2)).sum::<f64>() / 7.0;
+        let vm = medium.iter().map(|(_, v)| (v - mm).powi(2)).sum::<f64>() / 2.0;
+        let sm: Vec<f64> = medium.iter().map(|(j, _)| surface[*j]).collect();
+        let msm = sm.iter().sum::<f64>() / 3.0;
+        let c = medium
+            .iter()
+            .zip(&sm)
+            .map(|((_, v), s)| (v - mm) * (s - msm))
+            .sum::<f64>()
+            / 2.0;
+        let se = (vs / 8.0 + vm / 3.0 + 2.0 * c / 8.0).sqrt();
+        assert!((img.std_error[0] - se).abs() < 1e-12, "{} vs {se}", img.std_error[0]);
+    }
 }
