@@ -5,9 +5,9 @@
 //! Camera samples are taken in passes. Without a time budget or an adaptive split
 //! there is one pass of `image.spp` samples. With a time budget
 //! (`image.time_budget`: what is left for the image once its records are placed),
-//! the samples placement visited come first, then passes that double the count,
-//! each started only if the last one's seconds per sample say it ends within the
-//! budget: a cache's time saved on records is spent on camera samples, which
+//! the samples placement visited come first, then passes that double the count
+//! while the last one's seconds per sample say they end within the budget, the
+//! last shortened to the samples that fit (`super::render::fitting_pass`): a cache's time saved on records is spent on camera samples, which
 //! interpolation makes cheap. With an adaptive split ([`SplitMode::Adaptive`]) the
 //! placed samples' statistics choose how the later ones march
 //! ([`super::image_split`]); without a time budget, as many of those follow as cost
@@ -19,7 +19,7 @@ use super::camera_march::CameraRay;
 use super::image_split::{ImageSplit, MarchSpread, PixelSpread, choose, equal_cost_samples, marched_samples, marches};
 use super::lights::Lobe;
 use super::mesh::Hit;
-use super::render::{Rendered, camera};
+use super::render::{Rendered, camera, fitting_pass};
 use super::scene::Scene;
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::Sampler;
@@ -137,12 +137,16 @@ where
     let mut end = spp;
     let mut passes = vec![(0, first)];
     progress.start(h as u64);
-    while let Some((k0, k1)) = passes.pop() {
-        if let Some(budget) = ip.time_budget {
-            let predicted = per_sample * (k1 - k0) as f64;
-            if done > 0 && start.elapsed().as_secs_f64() + predicted > budget {
-                break;
-            }
+    while let Some(pass) = passes.pop() {
+        let (k0, k1) = match ip.time_budget {
+            Some(budget) if done > 0 => match fitting_pass(pass, start.elapsed().as_secs_f64(), budget, per_sample) {
+                Some(p) => p,
+                None => break,
+            },
+            _ => pass,
+        };
+        if (k0, k1) != pass {
+            passes.clear(); // a shortened pass is the last
         }
         if done > 0 {
             // Each pass shown on its own (with a time budget their number is unknown).

@@ -4,8 +4,9 @@
 //! pixel (i, j) always draws from the stream (seed, j·W + i, k) of the *full* image,
 //! so the image depends only on the number of samples — not on threads, on the
 //! pass schedule or on the crop window (crops of one image tile it exactly). A time
-//! budget stops before a pass that would not fit, so a budget only changes how many
-//! samples were taken (reported).
+//! budget shortens the first pass that would not fit to the samples that do
+//! ([`fitting_pass`]) and stops there, so a budget only changes how many samples
+//! were taken (reported).
 
 use super::camera::Camera;
 use super::scene::Scene;
@@ -109,6 +110,22 @@ fn passes(spp: u32) -> Vec<(u32, u32)> {
     v
 }
 
+/// Share of a time budget's remaining seconds a last, shortened pass is sized to
+/// fill (its seconds per sample are predicted from the pass before it).
+const LAST_PASS_FILL: f64 = 0.9;
+
+/// The pass `(k0, k1)` if `per_sample` seconds a sample say it ends within
+/// `budget` seconds of which `elapsed` are spent; else the samples that fit
+/// (shortened: the last pass), or None when none does. Doubling passes alone
+/// would leave up to half a budget unspent.
+pub(super) fn fitting_pass((k0, k1): (u32, u32), elapsed: f64, budget: f64, per_sample: f64) -> Option<(u32, u32)> {
+    if elapsed + per_sample * (k1 - k0) as f64 <= budget {
+        return Some((k0, k1));
+    }
+    let fit = LAST_PASS_FILL * (budget - elapsed) / per_sample;
+    (fit >= 1.0).then(|| (k0, k0 + (fit as u32).min(k1 - k0)))
+}
+
 /// Render the window of the image. Cancellation is checked per pixel; progress
 /// counts rows of passes (with a time budget: rows of the current pass).
 pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Result<Rendered, Cancelled> {
@@ -122,13 +139,14 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
     let mut acc = vec![(Rgb::ZERO, 0.0, 0.0, Rgb::ZERO); w * h];
     // Seconds per sample of the last pass predict the next one.
     let (mut rays, mut done, mut per_sample) = (0u64, 0u32, 0.0f64);
-    for &(k0, k1) in &schedule {
-        if let Some(budget) = params.time_budget {
-            let predicted = per_sample * (k1 - k0) as f64;
-            if done > 0 && start.elapsed().as_secs_f64() + predicted > budget {
-                break;
-            }
-        }
+    for &pass in &schedule {
+        let (k0, k1) = match params.time_budget {
+            Some(budget) if done > 0 => match fitting_pass(pass, start.elapsed().as_secs_f64(), budget, per_sample) {
+                Some(p) => p,
+                None => break,
+            },
+            _ => pass,
+        };
         if params.time_budget.is_some() {
             progress.start(h as u64); // the number of passes is unknown: show each pass
         }
@@ -168,6 +186,9 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
         rays += pass_rays.iter().sum::<u64>();
         per_sample = pass_start.elapsed().as_secs_f64() / (k1 - k0) as f64;
         done = k1;
+        if (k0, k1) != pass {
+            break; // a shortened pass is the last
+        }
     }
     let n = done.max(1) as f64;
     let values = acc.iter().map(|a| a.0 / n).collect();
@@ -215,7 +236,17 @@ pub fn ray_cast_rate(scene: &Scene, rays: u64, seed: u64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::passes;
+    use super::{fitting_pass, passes};
+
+    /// A pass that fits is kept; one that does not is shortened to the samples
+    /// that fill 90% of what is left; none fits when not one sample does.
+    #[test]
+    fn the_last_pass_fills_the_budget() {
+        assert_eq!(fitting_pass((64, 128), 50.0, 90.0, 0.5), Some((64, 128)));
+        assert_eq!(fitting_pass((64, 128), 60.0, 90.0, 1.0), Some((64, 91)));
+        assert_eq!(fitting_pass((64, 128), 89.5, 90.0, 1.0), None);
+        assert_eq!(fitting_pass((64, 128), 95.0, 90.0, 1.0), None);
+    }
 
     #[test]
     fn pass_schedule_covers_all_samples() {
