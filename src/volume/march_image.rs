@@ -7,8 +7,9 @@
 //! (`image.time_budget`: what is left for the image once its records are placed),
 //! the samples placement visited come first, then passes that double the count
 //! while the last one's seconds per sample say they end within the budget, the
-//! last shortened to the samples that fit (`super::render::fitting_pass`): a cache's time saved on records is spent on camera samples, which
-//! interpolation makes cheap. With an adaptive split ([`SplitMode::Adaptive`]) the
+//! last shortened to the samples that fit (`super::render::fitting_pass`): a
+//! cache's time saved on records is spent on camera samples, which interpolation
+//! makes cheap. With an adaptive split ([`SplitMode::Adaptive`]) the
 //! placed samples' statistics choose how the later ones march
 //! ([`super::image_split`]); without a time budget, as many of those follow as cost
 //! what the rest of `image.spp` would have. A pixel's samples are summed in order
