@@ -59,10 +59,11 @@ pub struct Cache3dArgs {
     pub image_march_step: Option<f64>,
     /// With --time-budget or --place-spp: only one in M of the camera samples
     /// beyond the placed ones marches (runs of 8 consecutive samples, which
-    /// stratify the pixel, one run in M); the others sample the first surface alone, and the
-    /// medium part is the mean over the marched ones (cheaper surface samples
-    /// where the march is most of a sample's cost). `--image-split adaptive`
-    /// chooses M itself.
+    /// stratify the pixel, one run in M); the others sample the first surface
+    /// alone, and the medium part is the mean over the marched ones (cheaper
+    /// surface samples where the march is most of a sample's cost). Not chosen
+    /// by `--image-split adaptive`, whose summary table (`march_every`) predicts
+    /// each M's variance and cost.
     #[arg(long, value_name = "M")]
     pub image_march_every: Option<u32>,
     /// How the camera samples beyond the placed ones march: `adaptive` takes the
@@ -149,7 +150,8 @@ impl Cache3dArgs {
     /// What a budget sets beside the options given (`render3d --budget`, `bench
     /// tradeoff3d --budgets`): its straight-light samples and placed camera samples
     /// unless given, and the adaptive split of the camera samples beyond the placed
-    /// ones when there are some and no --image-march-step.
+    /// ones when there are some and neither --image-march-step nor
+    /// --image-march-every is given.
     pub fn budget_defaults(&mut self, s: &BudgetSettings) {
         self.direct_samples.get_or_insert(s.direct_samples);
         let placed = *self.place_spp.get_or_insert(s.place_spp);

@@ -43,7 +43,8 @@ pub const MARCH_FACTORS: [u32; 4] = [1, 2, 4, 8];
 /// on a machine shared with other work; one outlier 1.43).
 pub const POINT_COST: f64 = 1.0;
 
-/// The march shares tried: one later camera sample in m marches.
+/// The march shares predicted: one in m of the later camera samples marches
+/// ([`marches`]).
 pub const MARCH_EVERY: [u32; 5] = [1, 2, 4, 8, 16];
 
 /// At most this many times the fine samples' count is taken at equal cost (a
@@ -179,11 +180,11 @@ impl PixelSpread {
 /// image's gain. A march share (`CachedRenderParams::image_march_every`) trades
 /// the medium's variance for the first surface's instead, and is not chosen here:
 /// weighed by √(image ratio × medium ratio) × cost, at the budget test's panel
-/// scene it took one sample in two: at budget 1 the image's RMSE fell 18–37%
-/// (medium −15…+18%; seeds 6–9, equal rays), at budget 4 it moved −8…+40%, the
-/// image's error sitting there on a floor (≈ 0.009) more samples did not lower,
-/// so the error no longer fell with the budget. Its predictions are reported
-/// for a user to take it.
+/// scene (12×9) it took one sample in two: against a 65,536-spp reference of the
+/// same seed, at budget 1 the image's RMSE fell 17–38% (medium −9…+21%; seeds
+/// 6–9, equal rays), at budget 4 it moved −11…+27%, the image's error there being
+/// two pixels on the lamp's edge, so the error no longer fell with the budget
+/// (README). Its predictions are reported for a user to take it.
 pub fn choose(pixels: &[PixelSpread], direct: Option<u32>) -> (ImageSplit, Vec<ImageSplit>) {
     let all = candidates(pixels, direct);
     let product = |s: &ImageSplit| s.variance_ratio.max(s.medium_variance_ratio) * s.cost_ratio;
