@@ -226,3 +226,73 @@ fn the_placed_samples_predict_the_march_share() {
         "predicted / measured over seeds 1–4: {mean_ratio:.3}"
     );
 }
+
+/// Thin emitting strips on a black wall behind fog, seen by the camera: a pixel's
+/// light from the first surface is all in whether its camera sample hits a strip
+/// (most of the variance, and nearly free: the camera ray alone), the medium's
+/// needs the march (the strips' light sampled at every point).
+const STRIPS: &str = r#"{
+  "camera": {"position": [0, 0.6, 3.0], "look_at": [0, 0.6, 0], "fov_deg": 30},
+  "shapes": [
+    {"quad": {"origin": [-1.5, 0, -1.5], "u": [0, 0, 3], "v": [3, 0, 0]}, "reflectance": 0},
+    {"quad": {"origin": [-0.62, 0.2, -1], "u": [0.05, 0, 0], "v": [0, 0.8, 0]}, "reflectance": 0, "emission": [6, 6, 6]},
+    {"quad": {"origin": [-0.21, 0.2, -1], "u": [0.05, 0, 0], "v": [0, 0.8, 0]}, "reflectance": 0, "emission": [6, 6, 6]},
+    {"quad": {"origin": [0.2, 0.2, -1], "u": [0.05, 0, 0], "v": [0, 0.8, 0]}, "reflectance": 0, "emission": [6, 6, 6]},
+    {"quad": {"origin": [0.61, 0.2, -1], "u": [0.05, 0, 0], "v": [0, 0.8, 0]}, "reflectance": 0, "emission": [6, 6, 6]}
+  ],
+  "medium": {"sigma_a": 0.05, "sigma_s": 0.4, "g": 0.5,
+             "region": {"box": {"min": [-1.2, 0, -0.9], "max": [1.2, 1.2, 1.2]}}},
+  "render": {"resolution": [12, 9], "spp": 4, "seed": 3, "max_depth": 8, "exposure": 0.0}
+}"#;
+
+/// Asked to choose the march share (`adapt_march_share`), the split takes one
+/// where the first surface's light is most of the variance (the lit floor) and
+/// none where the medium's is all of it (black surfaces); the chosen render is
+/// the same whatever the thread count, its mean matches the fine render's within
+/// their noise, and at about the same rays its image's variance is lower than
+/// the split's without a share.
+#[test]
+fn the_march_share_is_chosen_where_the_surface_holds_the_variance() {
+    let progress = Progress::new();
+    let pool = |n: usize| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+    let lit = Scene::from_json(STRIPS, "<strips>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let black = slot();
+    for seed in [1, 2] {
+        let p = params(&lit, 16, seed);
+        let placement = placed(&lit, &p);
+        let view = CacheView::of(&placement);
+        let mut unshared = p.clone();
+        (unshared.place_spp, unshared.adapt_image) = (Some(4), true);
+        let auto = CachedRenderParams {
+            adapt_march_share: true,
+            ..unshared.clone()
+        };
+        let one = pool(1).install(|| reconstruct(&lit, &auto, view, false, &progress).unwrap());
+        let two = pool(2).install(|| reconstruct(&lit, &auto, view, false, &progress).unwrap());
+        assert_eq!((&one.image.values, one.split), (&two.image.values, two.split));
+        let split = one.split.expect("an adaptive render says its split");
+        let plain = reconstruct(&lit, &unshared, view, false, &progress).unwrap();
+        let fine = reconstruct(&lit, &p, view, false, &progress).unwrap().image;
+        let mean = |img: &Rendered| img.values.iter().map(|v| luminance(*v)).sum::<f64>() / img.values.len() as f64;
+        let se2 = |img: &Rendered| img.std_error.iter().map(|e| e * e).sum::<f64>();
+        let (a, b) = (mean(&one.image), mean(&fine));
+        let tol = 4.0 * (se2(&one.image) + se2(&fine)).sqrt() / fine.values.len() as f64;
+        let variance = se2(&one.image) / se2(&plain.image);
+        let rays = one.image.rays as f64 / plain.image.rays as f64;
+        println!(
+            "seed {seed}: auto {split:?}, {} samples; plain {:?}, {} samples; variance of the mean {variance:.3}×, rays {rays:.3}×; mean {a:.5} vs fine {b:.5} ± {tol:.5}",
+            one.image.spp, plain.split, plain.image.spp
+        );
+        assert!(split.march_every > 1, "{split:?}");
+        assert!((a - b).abs() < tol, "{a} vs {b} ± {tol}");
+        assert!((0.6..1.3).contains(&rays), "rays ratio {rays}");
+        assert!(variance < 0.8, "image variance {variance:.3}× the unshared split's");
+        // Black surfaces: the medium is the image, a share would only add variance.
+        let q = params(&black, 16, seed);
+        let placement = placed(&black, &q);
+        let mut auto = q.clone();
+        (auto.place_spp, auto.adapt_image, auto.adapt_march_share) = (Some(4), true, true);
+        let r = reconstruct(&black, &auto, CacheView::of(&placement), false, &progress).unwrap();
+        assert_eq!(r.split.map(|s| s.march_every), Some(1), "{:?}", r.split);
+    }
+}

@@ -125,6 +125,41 @@ fn a_cached_render_spends_its_time_budget_on_camera_samples() {
     assert!(placed < secs, "records {placed} s of {secs} s");
 }
 
+/// A budget too short for the records is not honoured silently: the run says it
+/// was exceeded, by what, and what would fit.
+#[test]
+fn an_exceeded_time_budget_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = volcache()
+        .args([
+            "render3d",
+            "scenes3d/fog_box.json",
+            "--method",
+            "ours",
+            "--res",
+            "16x12",
+        ])
+        .args([
+            "--rays",
+            "256",
+            "--steps",
+            "8",
+            "--time-budget",
+            "0.001",
+            "--quiet",
+            "--out",
+        ])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("--time-budget 0.001 s exceeded") && err.contains("the records took") && err.contains("--eps"),
+        "{err}"
+    );
+}
+
 /// `--place-spp`: the records are placed over the first camera samples of each
 /// pixel only, the image takes all of them; the summary says how many were
 /// placed over, and the placement walked about that share of the march points.
@@ -192,6 +227,13 @@ fn records_can_be_placed_over_fewer_camera_samples_than_the_image_takes() {
     assert!(mean(&share).is_finite() && mean(&share) > 0.0);
     let table = split["cache"]["image_split_candidates"].as_array().unwrap();
     assert!(table.iter().any(|c| c["march_every"].as_u64() == Some(4)), "{table:?}");
+    // `auto`: the adaptive split chooses the share too, and the summary says
+    // which (the share asked for stays unset).
+    let auto = run(&["--place-spp", "2", "--image-march-every", "auto"], "auto");
+    let chosen = &auto["cache"]["image_split"];
+    assert!(chosen["march_every"].as_u64().is_some(), "{}", auto["cache"]);
+    assert!(auto["cache"].get("image_march_every").is_none(), "{}", auto["cache"]);
+    assert!(mean(&auto).is_finite() && mean(&auto) > 0.0);
 }
 
 #[test]
@@ -315,6 +357,30 @@ fn bad_input_is_a_clear_error() {
         ],
         "--image-split adaptive chooses",
     );
+    // `auto` is the adaptive split's choice: not beside a fixed split or march
+    // step, and only with samples beyond the placed ones; a share is a count or
+    // `auto`.
+    let ours_placed = ["render3d", s, "--method", "ours", "--place-spp", "1"];
+    for (extra, want) in [
+        (
+            &["--image-march-every", "auto", "--image-split", "fixed"][..],
+            "--image-march-every auto is chosen",
+        ),
+        (
+            &["--image-march-every", "auto", "--image-march-step", "0.1"][..],
+            "--image-march-every auto is chosen",
+        ),
+        (
+            &["--image-march-every", "often"][..],
+            "expected a whole number or `auto`",
+        ),
+        (
+            &["--image-march-every", "auto", "--spp", "1"][..],
+            "--image-march-every auto splits",
+        ),
+    ] {
+        fails_with(&[&ours_placed[..], extra].concat(), want);
+    }
     fails_with(&["render3d", s, "--method", "ours", "--eps", "nan"], "--eps");
     fails_with(
         &["render3d", s, "--method", "ours", "--direct-samples", "0"],

@@ -258,6 +258,39 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
     write_outputs(&base, &img, exposure, &mut summary, &progress)
 }
 
+/// What a render that overran its time budget by more than 5% says about why:
+/// a cache method's records, and the camera samples its placement visited, are
+/// rendered whatever the budget; a path tracer's first sample per pixel is too.
+fn over_budget(s: &Summary3d) -> Option<String> {
+    let budget = s.params.time_budget?;
+    if s.seconds <= 1.05 * budget {
+        return None;
+    }
+    let head = format!("note: --time-budget {budget} s exceeded ({:.3} s in all):", s.seconds);
+    Some(match &s.cache {
+        Some(c) => {
+            let surfaces = c.surfaces.as_ref().map_or(0.0, |x| x.seconds);
+            let records = c.placement_seconds + surfaces;
+            format!(
+                "{head} the records took {records:.1} s{} and the {} camera samples per pixel they were placed \
+                 over, which are always rendered, the rest; a larger --eps (or --surface-eps), fewer --rays or \
+                 fewer --spp fit a budget this short",
+                if surfaces > 0.0 {
+                    format!(" ({surfaces:.1} s of it surface records)")
+                } else {
+                    String::new()
+                },
+                c.placed_spp
+            )
+        }
+        None => format!(
+            "{head} a pass is shortened to fit but at least one sample per pixel is rendered ({} rendered); \
+             a smaller --res or a --crop fits a budget this short",
+            s.spp
+        ),
+    })
+}
+
 /// What a render reads (the scene, its meshes, records and reference) and writes.
 fn plan(a: &Render3dArgs, scene: &Scene, base: &Path) -> OutputPlan {
     let mut plan = OutputPlan::new();
@@ -310,6 +343,9 @@ fn report(s: &Summary3d, img: &Rendered) {
                 String::new()
             }
         );
+    }
+    if let Some(note) = over_budget(s) {
+        eprintln!("{note}");
     }
     if let Some(b) = s.rays3d_closest_hit_per_second {
         eprintln!("ray casting: {:.2} M closest-hit rays/s", b / 1e6);

@@ -61,11 +61,14 @@ pub struct Cache3dArgs {
     /// beyond the placed ones marches (runs of 8 consecutive samples, which
     /// stratify the pixel, one run in M); the others sample the first surface
     /// alone, and the medium part is the mean over the marched ones (cheaper
-    /// surface samples where the march is most of a sample's cost). Not chosen
-    /// by `--image-split adaptive`, whose summary table (`march_every`) predicts
+    /// surface samples where the march is most of a sample's cost). `auto`: the
+    /// adaptive split (`--image-split adaptive`, implied) also chooses M, by the
+    /// image's and the medium part's equal-time errors relative to every sample
+    /// marching, summed (the medium's may rise where the image gains more);
+    /// without `auto` the split's summary table (`march_every`) only predicts
     /// each M's variance and cost.
-    #[arg(long, value_name = "M")]
-    pub image_march_every: Option<u32>,
+    #[arg(long, value_name = "M|auto", value_parser = parse_march_every)]
+    pub image_march_every: Option<MarchEveryArg>,
     /// How the camera samples beyond the placed ones march: `adaptive` takes the
     /// march step (Δ, 2Δ, 4Δ or 8Δ) and straight-light samples (n, n/2, n/4) of
     /// least variance × cost, measured on the placed samples, and without a time
@@ -124,6 +127,24 @@ pub enum SurfaceCacheArg {
     Ours,
 }
 
+/// Which camera samples beyond the placed ones march (`--image-march-every`):
+/// one in a given count, or one in the count the adaptive split chooses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MarchEveryArg {
+    Every(u32),
+    Auto,
+}
+
+fn parse_march_every(s: &str) -> Result<MarchEveryArg, String> {
+    match s {
+        "auto" => Ok(MarchEveryArg::Auto),
+        _ => s
+            .parse()
+            .map(MarchEveryArg::Every)
+            .map_err(|_| format!("expected a whole number or `auto`, got `{s}`")),
+    }
+}
+
 /// How the camera samples beyond the placed ones march (`--image-split`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ImageSplitArg {
@@ -155,7 +176,8 @@ impl Cache3dArgs {
     pub fn budget_defaults(&mut self, s: &BudgetSettings) {
         self.direct_samples.get_or_insert(s.direct_samples);
         let placed = *self.place_spp.get_or_insert(s.place_spp);
-        if self.image_march_step.is_none() && self.image_march_every.is_none() && placed < s.spp {
+        let chosen_share = matches!(self.image_march_every, None | Some(MarchEveryArg::Auto));
+        if self.image_march_step.is_none() && chosen_share && placed < s.spp {
             self.image_split.get_or_insert(ImageSplitArg::Adaptive);
         }
     }
@@ -215,21 +237,40 @@ impl Cache3dArgs {
             anyhow::ensure!(finite_pos(d), "--image-march-step must be a positive distance");
             cp.image_march_step = Some(d);
         }
-        if let Some(m) = self.image_march_every {
+        if let Some(every) = self.image_march_every {
             anyhow::ensure!(
                 image.time_budget.is_some() || self.place_spp.is_some(),
                 "--image-march-every sets which camera samples beyond the placed ones march: give --time-budget or --place-spp"
             );
-            anyhow::ensure!(
-                (1..=1024).contains(&m),
-                "--image-march-every must be between 1 and 1024, got {m}"
-            );
-            cp.image_march_every = Some(m);
+            match every {
+                MarchEveryArg::Every(m) => {
+                    anyhow::ensure!(
+                        (1..=1024).contains(&m),
+                        "--image-march-every must be between 1 and 1024, got {m}"
+                    );
+                    cp.image_march_every = Some(m);
+                }
+                MarchEveryArg::Auto => {
+                    anyhow::ensure!(
+                        self.image_march_step.is_none() && self.image_split != Some(ImageSplitArg::Fixed),
+                        "--image-march-every auto is chosen by the adaptive split, which chooses the march step too: not beside --image-march-step or --image-split fixed"
+                    );
+                    cp.adapt_march_share = true;
+                }
+            }
         }
+        let fixed_share = matches!(self.image_march_every, Some(MarchEveryArg::Every(_)));
         cp.adapt_image = match self.image_split {
+            _ if cp.adapt_march_share => {
+                anyhow::ensure!(
+                    image.time_budget.is_some() || self.place_spp.is_some_and(|n| n < image.spp),
+                    "--image-march-every auto splits the camera samples beyond the placed ones: give --time-budget, or --place-spp below --spp"
+                );
+                true
+            }
             Some(ImageSplitArg::Adaptive) => {
                 anyhow::ensure!(
-                    self.image_march_step.is_none() && self.image_march_every.is_none(),
+                    self.image_march_step.is_none() && !fixed_share,
                     "--image-split adaptive chooses how the camera samples beyond the placed ones march: give it or --image-march-step / --image-march-every, not both"
                 );
                 anyhow::ensure!(
@@ -239,7 +280,7 @@ impl Cache3dArgs {
                 true
             }
             Some(ImageSplitArg::Fixed) => false,
-            None => image.time_budget.is_some() && self.image_march_step.is_none() && self.image_march_every.is_none(),
+            None => image.time_budget.is_some() && self.image_march_step.is_none() && !fixed_share,
         };
         if self.surface_cache == SurfaceCacheArg::Ours {
             let e = self.surface_eps.unwrap_or_else(|| default_surface_eps(scene));

@@ -57,6 +57,11 @@ pub struct CachedRenderParams {
     /// when false.)
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub adapt_image: bool,
+    /// With `adapt_image`: the march share too is chosen from the placed samples'
+    /// statistics (`super::image_split::share_cost`), in place of
+    /// `image_march_every`. (Left out of JSON when false.)
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub adapt_march_share: bool,
 }
 
 /// The march step of camera rays unless given: the scene's size / 128.
@@ -75,6 +80,7 @@ impl CachedRenderParams {
             image_march_step: None,
             image_march_every: None,
             adapt_image: false,
+            adapt_march_share: false,
         }
     }
 

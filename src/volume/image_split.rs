@@ -17,8 +17,9 @@
 //! march point; every statistic is summed per pixel in sample order, then over the
 //! pixels in order, so the choice does not depend on the thread count.
 //!
-//! The march share is predicted too (taken when a user asks,
-//! `CachedRenderParams::image_march_every`, not chosen: see [`choose`]): only one
+//! The march share is predicted too, and taken when a user asks: a share given
+//! (`CachedRenderParams::image_march_every`) or one chosen by [`share_cost`]
+//! (`CachedRenderParams::adapt_march_share`; see [`choose`]): only one
 //! in m of the later camera samples marches (in runs, [`MARCH_RUN`]; the first
 //! surface is sampled by all of them, the medium part averaged over the marched
 //! ones). Where the march is most of a sample's cost and the first surface's
@@ -172,30 +173,45 @@ impl PixelSpread {
 
 /// The (K, straight-light samples) of least variance × cost over the window's
 /// pixels, their placed samples marched at Δ with `direct` straight-light samples
-/// (candidates n/4, n/2, n where n divides), every camera sample marching.
+/// (candidates n/4, n/2, n where n divides), every camera sample marching — and,
+/// with `share`, then the march share of that (K, n) by [`share_cost`].
 /// Returns it and every candidate ([`candidates`], the march shares' included).
 ///
-/// The variance weighed is the worse of the image's and the medium part's ratios:
-/// what a march adds is all the medium's, so the medium never pays for the
-/// image's gain. A march share (`CachedRenderParams::image_march_every`) trades
-/// the medium's variance for the first surface's instead, and is not chosen here:
-/// weighed by √(image ratio × medium ratio) × cost, at the budget test's panel
-/// scene (12×9) it took one sample in two: against a 65,536-spp reference of the
-/// same seed, at budget 1 the image's RMSE fell 17–38% (medium −9…+21%; seeds
-/// 6–9, equal rays), at budget 4 it moved −11…+27%, the image's error there being
-/// two pixels on the lamp's edge, so the error no longer fell with the budget
-/// (README). Its predictions are reported for a user to take it.
-pub fn choose(pixels: &[PixelSpread], direct: Option<u32>) -> (ImageSplit, Vec<ImageSplit>) {
+/// The variance weighed for (K, n) is the worse of the image's and the medium
+/// part's ratios: what a march adds is all the medium's, so the medium never pays
+/// for the image's gain. A march share (`CachedRenderParams::image_march_every`)
+/// trades the medium's variance for the first surface's instead, so it is chosen
+/// only where a user asks (`--image-march-every auto`): weighed by √(image ratio
+/// × medium ratio) × cost, at the budget test's panel scene (12×9) it took one
+/// sample in two: against a 65,536-spp reference of the same seed, at budget 1
+/// the image's RMSE fell 17–38% (medium −9…+21%; seeds 6–9, equal rays), at
+/// budget 4 it moved −11…+27%, the image's error there being two pixels on the
+/// lamp's edge, so the error no longer fell with the budget (README).
+pub fn choose(pixels: &[PixelSpread], direct: Option<u32>, share: bool) -> (ImageSplit, Vec<ImageSplit>) {
     let all = candidates(pixels, direct);
     let product = |s: &ImageSplit| s.variance_ratio.max(s.medium_variance_ratio) * s.cost_ratio;
-    let best = all
-        .iter()
-        .copied()
-        .filter(|c| c.march_every == 1)
-        .fold(ImageSplit::fine(direct), |best, c| {
-            if product(&c) < product(&best) { c } else { best }
-        });
-    (best, all)
+    let unshared = all.iter().copied().filter(|c| c.march_every == 1);
+    let best = least(unshared, ImageSplit::fine(direct), product);
+    if !share {
+        return (best, all);
+    }
+    let same_march = |c: &&ImageSplit| (c.march_factor, c.direct_samples) == (best.march_factor, best.direct_samples);
+    (least(all.iter().filter(same_march).copied(), best, share_cost), all)
+}
+
+/// The first of `start` and `of` with the least `rule` (ties keep the earlier).
+fn least(of: impl Iterator<Item = ImageSplit>, start: ImageSplit, rule: impl Fn(&ImageSplit) -> f64) -> ImageSplit {
+    of.fold(start, |best, c| if rule(&c) < rule(&best) { c } else { best })
+}
+
+/// What a march share is chosen by: the image's and the medium part's variance
+/// ratios, summed, times the cost ratio — the sum of the two parts' mean squared
+/// errors at equal time, each relative to the fine march's, so that each part
+/// weighs alike whatever its size. Every share the sum lowers lowers at least one
+/// part's equal-time error; the medium's may rise (m·V_m grows with m) where the
+/// image gains more.
+pub fn share_cost(s: &ImageSplit) -> f64 {
+    (s.variance_ratio + s.medium_variance_ratio) * s.cost_ratio
 }
 
 /// Every (K, straight-light samples, march share) with its predicted variance and
@@ -336,18 +352,18 @@ mod tests {
     #[test]
     fn the_choice_weighs_added_variance_against_cost() {
         let smooth = vec![pixel(8, 1.0, [0.01, 0.02, 0.04], [0.001, 0.0005], (10.0, 40.0, 160.0)); 4];
-        let s = choose(&smooth, Some(4)).0;
+        let s = choose(&smooth, Some(4), false).0;
         assert_eq!((s.march_factor, s.direct_samples), (8, Some(1)), "{s:?}");
         assert!(s.cost_ratio < 0.1 && s.variance_ratio < 1.1, "{s:?}");
         let sharp = vec![pixel(8, 1.0, [3.0, 9.0, 27.0], [2.0, 1.0], (10.0, 40.0, 160.0)); 4];
-        assert_eq!(choose(&sharp, Some(4)).0, ImageSplit::fine(Some(4)));
+        assert_eq!(choose(&sharp, Some(4), false).0, ImageSplit::fine(Some(4)));
         // Without straight-light samples only K is chosen.
-        let s = choose(&smooth, None).0;
+        let s = choose(&smooth, None, false).0;
         assert_eq!((s.march_factor, s.direct_samples), (8, None));
         // Non-finite statistics keep the fine march.
         let bad = vec![pixel(8, f64::NAN, [0.0; 3], [0.0; 2], (1.0, 1.0, 1.0))];
-        assert_eq!(choose(&bad, Some(4)), (ImageSplit::fine(Some(4)), Vec::new()));
-        assert_eq!(choose(&[], Some(4)).0, ImageSplit::fine(Some(4)));
+        assert_eq!(choose(&bad, Some(4), true), (ImageSplit::fine(Some(4)), Vec::new()));
+        assert_eq!(choose(&[], Some(4), true).0, ImageSplit::fine(Some(4)));
     }
 
     /// The coarse march's added variance is the spread of the subset estimators:
@@ -382,13 +398,43 @@ mod tests {
         // before it, the medium 5% of the variance.
         let mut p = pixel(8, 1.0, [3.0, 9.0, 27.0], [0.0; 2], (4.0, 96.0, 0.0));
         p.y_medium.1 = 7.0 * 0.05;
-        let (s, all) = choose(&vec![p; 3], None);
+        let (s, all) = choose(&vec![p; 3], None, false);
         assert_eq!(s, ImageSplit::fine(None));
         let m4 = all.iter().find(|c| c.march_every == 4 && c.march_factor == 1).unwrap();
         assert!((m4.variance_ratio - (1.0 + 3.0 * 0.05)).abs() < 1e-12, "{m4:?}");
         assert!((m4.medium_variance_ratio - 4.0).abs() < 1e-12, "{m4:?}");
         assert!((m4.cost_ratio - (4.0 + 96.0 / 4.0) / 100.0).abs() < 1e-12, "{m4:?}");
         assert_eq!(all.len(), MARCH_FACTORS.len() * MARCH_EVERY.len());
+    }
+
+    /// Asked to (`share`), the choice takes the share of least (image ratio +
+    /// medium ratio) × cost for the (K, n) it chose: with the surface 95% of the
+    /// variance and the march 96% of the cost, J(m) = (1 + 0.05(m − 1) + m) ×
+    /// (4 + 96/m)/100 is 2, 1.59, 1.44, 1.50, 1.78 at m = 1 … 16, so m = 4. Where
+    /// the medium is all of the variance, J = 2(4m + 96)/100 grows with m: none.
+    #[test]
+    fn a_share_is_chosen_by_both_parts_errors_at_equal_time() {
+        let mut p = pixel(8, 1.0, [3.0, 9.0, 27.0], [0.0; 2], (4.0, 96.0, 0.0));
+        p.y_medium.1 = 7.0 * 0.05;
+        let (s, all) = choose(&vec![p; 3], None, true);
+        assert_eq!((s.march_factor, s.march_every), (1, 4), "{s:?}");
+        let shared = |m| *all.iter().find(|c| c.march_factor == 1 && c.march_every == m).unwrap();
+        for (m, j) in [(1, 2.0), (2, 1.586), (4, 1.442), (8, 1.496), (16, 1.775)] {
+            assert!((share_cost(&shared(m)) - j).abs() < 1e-3, "m = {m}: {:?}", shared(m));
+        }
+        assert_eq!(choose(&vec![p; 3], None, false).0.march_every, 1);
+        // All of the variance the medium's: every sample keeps marching.
+        p.y_medium.1 = p.y.1;
+        assert_eq!(choose(&vec![p; 3], None, true).0, ImageSplit::fine(None));
+        // A coarser march chosen first, the share is that march's.
+        let smooth = vec![pixel(8, 1.0, [0.01, 0.02, 0.04], [0.001, 0.0005], (10.0, 40.0, 160.0)); 4];
+        let (s, _) = choose(&smooth, Some(4), true);
+        let unshared = choose(&smooth, Some(4), false).0;
+        assert_eq!(
+            (s.march_factor, s.direct_samples),
+            (unshared.march_factor, unshared.direct_samples)
+        );
+        assert!(share_cost(&s) <= share_cost(&unshared), "{s:?} {unshared:?}");
     }
 
     #[test]

@@ -54,8 +54,9 @@ pub enum SplitMode {
     /// At the (K, straight-light samples) of least variance × cost measured on the
     /// placed samples ([`super::image_split`]), which march at Δ with `direct`
     /// samples. Without a time budget, as many of them as cost what the image's
-    /// remaining camera samples would have cost at Δ.
-    Adaptive { direct: Option<u32> },
+    /// remaining camera samples would have cost at Δ. With `share`, one camera
+    /// sample in m of them marches, m chosen by `image_split::share_cost`.
+    Adaptive { direct: Option<u32>, share: bool },
 }
 
 /// L_s(p) towards the camera at one march point.
@@ -127,7 +128,7 @@ where
     let split_passes = adaptive || ip.time_budget.is_some();
     let first = if split_passes { params.placed_spp() } else { spp };
     let mut split = match mode {
-        SplitMode::Adaptive { direct } => ImageSplit::fine(direct),
+        SplitMode::Adaptive { direct, .. } => ImageSplit::fine(direct),
         SplitMode::Fixed => ImageSplit {
             march_every: params.image_march_every.unwrap_or(1),
             ..ImageSplit::fine(None)
@@ -205,8 +206,8 @@ where
         per_sample = pass_start.elapsed().as_secs_f64() / (k1 - k0) as f64;
         done = k1;
         if k0 == 0 && first < spp {
-            if let SplitMode::Adaptive { direct } = mode {
-                (split, candidates) = choose(&spreads, direct);
+            if let SplitMode::Adaptive { direct, share } = mode {
+                (split, candidates) = choose(&spreads, direct, share);
                 chosen = Some(split);
                 per_sample *= split.cost_ratio;
                 if ip.time_budget.is_none() {

@@ -64,6 +64,7 @@ pub fn reconstruct(
     let mode = match params.adapt_image {
         true => SplitMode::Adaptive {
             direct: view.direct_samples,
+            share: params.adapt_march_share,
         },
         false => SplitMode::Fixed,
     };
