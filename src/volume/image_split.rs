@@ -320,6 +320,18 @@ pub fn marched_samples(done: u32, first: u32, split: &ImageSplit) -> u32 {
     }
 }
 
+/// The cost of a camera sample when one in `m` marches, relative to every one
+/// marching, from the rays of samples that all marched: `total` of which `fixed`
+/// before the march (as [`candidates`]' cost ratio, without the march points' own
+/// cost, which only marching samples have). 1 without rays.
+pub fn shared_cost_ratio(fixed: u64, total: u64, m: u32) -> f64 {
+    if total == 0 {
+        return 1.0;
+    }
+    let fixed = fixed.min(total) as f64;
+    (fixed + (total as f64 - fixed) / m.max(1) as f64) / total as f64
+}
+
 /// Camera samples of `split` costing what `fine` fine samples cost (at least one
 /// each, at most [`MAX_SAMPLE_GAIN`] times as many).
 pub fn equal_cost_samples(fine: u32, split: &ImageSplit) -> u32 {
@@ -482,6 +494,14 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_shared_march_costs_its_fixed_part_and_a_share_of_the_march() {
+        assert!((shared_cost_ratio(4, 100, 4) - 0.28).abs() < 1e-12);
+        assert_eq!(shared_cost_ratio(4, 100, 1), 1.0);
+        assert_eq!(shared_cost_ratio(0, 0, 8), 1.0);
+        assert_eq!(shared_cost_ratio(7, 5, 8), 1.0);
     }
 
     #[test]

@@ -17,7 +17,9 @@
 
 use super::cached_params::CachedRenderParams;
 use super::camera_march::CameraRay;
-use super::image_split::{ImageSplit, MarchSpread, PixelSpread, choose, equal_cost_samples, marched_samples, marches};
+use super::image_split::{
+    ImageSplit, MarchSpread, PixelSpread, choose, equal_cost_samples, marched_samples, marches, shared_cost_ratio,
+};
 use super::lights::Lobe;
 use super::mesh::Hit;
 use super::render::{Rendered, camera, fitting_pass};
@@ -158,7 +160,7 @@ where
         // The placed samples' statistics, when the rest's split is to be chosen.
         let measure = adaptive && k0 == 0;
         let mut spreads = vec![PixelSpread::default(); if measure { w * h } else { 0 }];
-        let rows: Vec<Result<(u64, u64), Cancelled>> = acc
+        let rows: Vec<Result<(u64, u64, u64), Cancelled>> = acc
             .par_chunks_mut(w)
             .zip(
                 spreads
@@ -169,7 +171,7 @@ where
             .enumerate()
             .map(|(row, (pixels, mut spreads))| {
                 let (mut l_s, mut surface) = (l_s.clone(), surface.clone());
-                let (mut r, mut u) = (0u64, 0u64);
+                let (mut r, mut u, mut f) = (0u64, 0u64, 0u64);
                 let j = y0 + row;
                 for (x, (i, px)) in (x0..x1).zip(pixels.iter_mut()).enumerate() {
                     progress.check()?;
@@ -191,28 +193,37 @@ where
                             sp[x].add((at_surface + m, m), fixed, &march);
                         }
                         u += missed;
+                        f += fixed;
                         px.add(at_surface, medium);
                     }
                 }
                 progress.advance(1);
-                Ok((r, u))
+                Ok((r, u, f))
             })
             .collect();
+        let (mut pass_rays, mut pass_fixed) = (0u64, 0u64);
         for row in rows {
-            let (r, u) = row?;
-            rays += r;
+            let (r, u, f) = row?;
+            (pass_rays, pass_fixed) = (pass_rays + r, pass_fixed + f);
             uncovered += u;
         }
+        rays += pass_rays;
         per_sample = pass_start.elapsed().as_secs_f64() / (k1 - k0) as f64;
         done = k1;
         if k0 == 0 && first < spp {
-            if let SplitMode::Adaptive { direct, share } = mode {
-                (split, candidates) = choose(&spreads, direct, share);
-                chosen = Some(split);
-                per_sample *= split.cost_ratio;
-                if ip.time_budget.is_none() {
-                    end = first + equal_cost_samples(spp - first, &split);
+            match mode {
+                SplitMode::Adaptive { direct, share } => {
+                    (split, candidates) = choose(&spreads, direct, share);
+                    chosen = Some(split);
+                    per_sample *= split.cost_ratio;
+                    if ip.time_budget.is_none() {
+                        end = first + equal_cost_samples(spp - first, &split);
+                    }
                 }
+                // A share given: the later samples cost less than the placed ones,
+                // which all marched (else a time budget's first later pass would
+                // be sized for the placed samples' cost and cut short).
+                SplitMode::Fixed => per_sample *= shared_cost_ratio(pass_fixed, pass_rays, split.march_every),
             }
             passes = later_passes(first, end, ip.time_budget.is_some());
         }
