@@ -181,12 +181,13 @@ impl PixelSpread {
 /// part's ratios: what a march adds is all the medium's, so the medium never pays
 /// for the image's gain. A march share (`CachedRenderParams::image_march_every`)
 /// trades the medium's variance for the first surface's instead, so it is chosen
-/// only where a user asks (`--image-march-every auto`): weighed by √(image ratio
-/// × medium ratio) × cost, at the budget test's panel scene (12×9) it took one
-/// sample in two: against a 65,536-spp reference of the same seed, at budget 1
-/// the image's RMSE fell 17–38% (medium −9…+21%; seeds 6–9, equal rays), at
-/// budget 4 it moved −11…+27%, the image's error there being two pixels on the
-/// lamp's edge, so the error no longer fell with the budget (README).
+/// only where a user asks (`--image-march-every auto`, by [`share_cost`]). Chosen
+/// by default (then weighed by √(image ratio × medium ratio) × cost), at the
+/// budget test's panel scene (12×9) it took one sample in two: against a
+/// 65,536-spp reference of the same seed, at budget 1 the image's RMSE fell
+/// 17–38% (medium −9…+21%; seeds 6–9, equal rays), at budget 4 it moved
+/// −11…+27%, the image's error there being two pixels on the lamp's edge, so the
+/// error no longer fell with the budget (README).
 pub fn choose(pixels: &[PixelSpread], direct: Option<u32>, share: bool) -> (ImageSplit, Vec<ImageSplit>) {
     let all = candidates(pixels, direct);
     let product = |s: &ImageSplit| s.variance_ratio.max(s.medium_variance_ratio) * s.cost_ratio;
