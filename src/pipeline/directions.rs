@@ -5,8 +5,16 @@
 //! per (seed, k); neighbours are (k, k + 1).
 //!
 //! Sphere: z_k = 1 − 2(k + ½ + j·(ξ − ½))/N (equal-area
-//! bands in z), φ_k = 2π frac(k/Φ) + j·(ξ' − ½)·2π/√N, with jitter amount j ∈ [0, 1]
-//! drawn per (seed, k).
+//! bands in z), φ_k = 2π frac(k/Φ) + j·(ξ' − ½)·2π/√N + j·2πζ, with jitter amount
+//! j ∈ [0, 1], ξ, ξ' drawn per (seed, k) and one azimuth ζ per seed: the set turned
+//! as a whole about the z axis. Why the turn: with j = 1 each point is uniform in
+//! its band of z, and the turn makes it uniform in φ too, so each point is uniform
+//! over its band — the bands partition the sphere, and Σ f(ω_k)·4π/N is unbiased.
+//! Without it a point moved only 2π/√N about its golden-ratio azimuth, a window of
+//! 1/√N of its band, and the sum was biased wherever the integrand has features of
+//! the points' spacing: the solid angle of a cap of half-angle 0.1 rad came out
+//! +28% at N = 256 and −7.8% at 1024 (means over 400 seeds); a record's light
+//! field near a lamp in g = 0.8 fog −7% at 256 directions.
 //!
 //! Triangulation (spade): the direction nearest the south pole, P*, is the pole of a
 //! stereographic projection (x, y, z) ↦ (x, y)/(1 + z) of all other directions; their
@@ -35,13 +43,19 @@ pub fn circle(n: usize, jitter: f64, seed: u64) -> Vec<DVec2> {
 
 /// N stratified unit directions (spherical Fibonacci, jittered by `jitter` ∈ [0, 1]).
 pub fn fibonacci(n: usize, jitter: f64, seed: u64) -> Vec<DVec3> {
-    (0..n).map(|k| fibonacci_point(k, n, jitter, seed)).collect()
+    let turn = azimuth_turn(jitter, seed);
+    (0..n).map(|k| fibonacci_point(k, n, (jitter, turn), seed)).collect()
+}
+
+/// The azimuth by which a seed's set is turned as a whole (see the module docs).
+fn azimuth_turn(jitter: f64, seed: u64) -> f64 {
+    jitter * TAU * Sampler::new2(seed, 0x0a21_7b5e, 0).next_f64()
 }
 
 /// Point k of an N-point spherical Fibonacci set (see the module docs): z in
 /// equal-area bands from the north pole, φ by the golden ratio, each jittered in
-/// its stratum from the stream (seed, k).
-fn fibonacci_point(k: usize, n: usize, jitter: f64, seed: u64) -> DVec3 {
+/// its stratum from the stream (seed, k), then turned by `turn` about z.
+fn fibonacci_point(k: usize, n: usize, (jitter, turn): (f64, f64), seed: u64) -> DVec3 {
     let golden = (1.0 + 5f64.sqrt()) * 0.5;
     let nf = n as f64;
     let dphi = TAU / nf.sqrt();
@@ -52,7 +66,7 @@ fn fibonacci_point(k: usize, n: usize, jitter: f64, seed: u64) -> DVec3 {
         (0.0, 0.0)
     };
     let z = (1.0 - 2.0 * (k as f64 + 0.5 + jitter * u) / nf).clamp(-1.0, 1.0);
-    let phi = TAU * (k as f64 / golden).fract() + jitter * v * dphi;
+    let phi = TAU * (k as f64 / golden).fract() + jitter * v * dphi + turn;
     let r = (1.0 - z * z).max(0.0).sqrt();
     DVec3::new(r * phi.cos(), r * phi.sin(), z)
 }
@@ -136,9 +150,10 @@ pub fn half_circle(n: usize, normal: DVec2, jitter: f64, seed: u64) -> Vec<DVec2
 /// `any_orthonormal_pair` (so the triangulation's orientation carries over).
 pub fn hemisphere(n: usize, normal: DVec3, jitter: f64, seed: u64) -> Vec<DVec3> {
     let (t, b) = normal.any_orthonormal_pair();
+    let turn = azimuth_turn(jitter, seed);
     (0..n)
         .map(|k| {
-            let p = fibonacci_point(k, 2 * n, jitter, seed);
+            let p = fibonacci_point(k, 2 * n, (jitter, turn), seed);
             t * p.x + b * p.y + normal * p.z
         })
         .collect()
@@ -305,5 +320,44 @@ mod tests {
         // Equal-area bands: mean z near zero, each hemisphere half the points.
         let up = d.iter().filter(|v| v.z > 0.0).count();
         assert_eq!(up, 2048);
+    }
+
+    /// Over seeds, the sets' estimate of a small cap's solid angle, Σ 1[ω_k in
+    /// cap]·4π/N (2π/N on the hemisphere), is unbiased: within 4.5 standard errors
+    /// of 2π(1 − cos α) at N = 256 and 1024, for caps of half-angle 0.1–0.3 rad
+    /// (about the points' spacing) about tilted axes. Before each set was turned
+    /// as a whole about z, its points covered 1/√N of the sphere: 16–28% off at
+    /// N = 256, 5–8% at 1024 (20–60 standard errors).
+    #[test]
+    fn a_cap_is_measured_without_bias() {
+        let caps = [
+            (DVec3::new(0.3, -0.5, 0.81), 0.1f64),
+            (DVec3::new(0.3, -0.5, 0.81), 0.3),
+            (DVec3::new(-0.7, 0.1, 0.2), 0.2),
+            (DVec3::new(0.0, 0.6, 0.8), 0.15),
+        ];
+        for (axis, half) in caps {
+            let axis = axis.normalize();
+            let exact = 2.0 * PI * (1.0 - half.cos());
+            for (n, sphere) in [(256, true), (1024, true), (256, false)] {
+                let seeds = 400;
+                let (mut sum, mut sum2) = (0.0, 0.0);
+                for seed in 0..seeds {
+                    let (dirs, measure) = match sphere {
+                        true => (fibonacci(n, 1.0, seed), 4.0 * PI),
+                        false => (hemisphere(n, DVec3::Z, 1.0, seed), 2.0 * PI),
+                    };
+                    let inside = dirs.iter().filter(|w| w.dot(axis) > half.cos()).count();
+                    let e = inside as f64 * measure / n as f64;
+                    (sum, sum2) = (sum + e, sum2 + e * e);
+                }
+                let mean = sum / seeds as f64;
+                let se = ((sum2 / seeds as f64 - mean * mean) / seeds as f64).sqrt();
+                assert!(
+                    (mean - exact).abs() < 4.5 * se + 1e-12,
+                    "cap {half} about {axis} (n = {n}, sphere {sphere}): {mean:.5} ± {se:.5}, exact {exact:.5}"
+                );
+            }
+        }
     }
 }
