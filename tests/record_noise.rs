@@ -12,7 +12,7 @@ use volcache::core::space::Space;
 use volcache::pipeline::derivatives::{plain_estimate, scattered_value_variance};
 use volcache::pipeline::dim::Dim;
 use volcache::pipeline::probe::{Outgoing, capture};
-use volcache::pipeline::record::{CacheSettings, Cached, NoiseTarget, compute_record};
+use volcache::pipeline::record::{CacheSettings, Cached, NoiseTarget, compute_record, light_field_seed};
 use volcache::pipeline::world::{VecOf, World};
 use volcache::progress::Progress;
 
@@ -116,11 +116,18 @@ fn records<W: World>(world: &W, x: VecOf<W>, out: Outgoing<VecOf<W>>, target: Op
 }
 
 /// A demanding target (2% relative standard error, out of reach at these points):
-/// the records take all 8 light fields, their values' variance over seeds falls
-/// to at most half (1/8 expected; the values are heavy-tailed, so 24 seeds measure
-/// a variance only roughly: see the printout), and their mean stays within 4
-/// standard errors of the single light field's. A target met at once (10) gives
-/// the same record as none, bit for bit.
+/// each record takes all 8 light fields (8× the rays), and its value is exactly
+/// the mean of 8 different light fields — those of its streams (seed, 0 … 7) —
+/// so its variance is an eighth of one light field's; over 24 seeds the mean stays
+/// within 4 standard errors of the single light field's. A target met at once (10)
+/// gives the same record as none, bit for bit.
+///
+/// Why not the variance over seeds: one light field's value is heavy-tailed here
+/// (thick g = 0.8 fog; the multiple part's largest of 200 seeds is 12× its
+/// median in 3D, and in 2D a point light's variance is unbounded), so sample
+/// variances of 24 seeds cannot measure 1/8: over 12 disjoint blocks of 24 seeds
+/// the ratio ranged 0.05–1.4 in 3D and 0.05–9.0 in 2D (0.18–0.28 over 200 seeds
+/// in 3D), and a bound of 0.5 on it failed 1–3 blocks of 12 at every point.
 fn adaptive_records<W: World>(world: &W, points: &[VecOf<W>], out: impl Fn(VecOf<W>) -> Outgoing<VecOf<W>>)
 where
     VecOf<W>: std::fmt::Debug,
@@ -134,6 +141,24 @@ where
             (b.parts, b.rays),
             "{x:?}: a target met at once changes nothing"
         );
+        // The record of 8 light fields against its light fields, one by one.
+        let cs = settings::<W::S>(256, 9, Some(0.02));
+        let record = compute_record(world, x, out(x), &cs, 3, &p).unwrap();
+        let fields: Vec<f64> = (0..8)
+            .map(|k| {
+                let lf = capture(world, x, out(x), &cs.probe, light_field_seed(&cs, 3), k, &p).unwrap();
+                let v = plain_estimate(&lf);
+                volcache::core::color::luminance(v.single + v.multiple)
+            })
+            .collect();
+        let mean = fields.iter().sum::<f64>() / 8.0;
+        let got = record.payload(Cached::Scattered).luminance().value;
+        assert!(
+            (got - mean).abs() <= 1e-12 * mean.abs(),
+            "{x:?}: record {got} against its light fields' mean {mean} ({fields:?})"
+        );
+        let distinct = fields.iter().all(|f| fields.iter().filter(|g| *g == f).count() == 1);
+        assert!(distinct, "{x:?}: light fields repeat: {fields:?}");
         let n = 24;
         let one = records(world, x, out(x), None, n);
         let many = records(world, x, out(x), Some(0.02), n);
@@ -143,7 +168,7 @@ where
         let se = (v1 / n as f64 + vn / n as f64).sqrt();
         println!(
             "{}D {x:?}: one light field {m1:.4e} ± {:.2}%, adaptive {mn:.4e} ± {:.2}% with {cost:.2}× the rays; \
-             variance {:.2}×, mean difference {:+.2} s.e.",
+             variance {:.2}× (not checked: see above), mean difference {:+.2} s.e.",
             W::S::DIM,
             100.0 * v1.sqrt() / m1,
             100.0 * vn.sqrt() / mn,
@@ -151,7 +176,6 @@ where
             (mn - m1) / se
         );
         assert!(cost > 7.5, "{x:?}: the records took {cost:.2}× the rays");
-        assert!(vn < 0.5 * v1, "{x:?}: variance {vn:.3e} vs {v1:.3e}");
         assert!((mn - m1).abs() < 4.0 * se, "{x:?}: mean {mn} vs {m1} (s.e. {se})");
     }
 }

@@ -236,6 +236,12 @@ impl<S: Dim> RecordData<S> {
     }
 }
 
+/// The seed of record `id`'s light fields: its k-th light field is `probe::capture`
+/// at this seed and item k (k > 0 only with [`CacheSettings::record_noise`]).
+pub fn light_field_seed(cs: &CacheSettings, id: u64) -> u64 {
+    mix64(cs.seed ^ mix64(id))
+}
+
 /// The light field at query point `x` (stream `id`) and what the method derives.
 pub fn compute_record<W: World>(
     world: &W,
@@ -258,7 +264,7 @@ pub fn compute_record<W: World>(
         },
         ..cs.probe
     };
-    let seed = mix64(cs.seed ^ mix64(id));
+    let seed = light_field_seed(cs, id);
     let mut lf = capture(world, x, out, &probe, seed, 0, progress)?;
     // Only a placement that limits reach by it pays for the boundary's check.
     let (nearest_edge, edge_rays) = match cs.edge_reach {
