@@ -13,7 +13,8 @@ use volcache::progress::Progress;
 use volcache::study::exact3d;
 use volcache::volume::scene::Scene;
 
-/// Seeds per point in the tests; their bounds are ≈ 2–3× the worst of seeds 1–4.
+/// Seeds per point in the tests; their bounds are ≈ 2–3× the worst of seeds 1–4
+/// (1–8 for `derivatives_next_to_an_emitter`).
 const SEEDS: u64 = 2;
 
 fn probe(scene: &Scene, x: DVec3, out: Outgoing<DVec3>, rays: usize, seed: u64) -> LightField<D3> {
@@ -34,15 +35,21 @@ fn below_an_emitter(sigma_s: f64, g: f64) -> Scene {
 
 /// x at d below a 1 × 1 emitter (off its centre), light leaving along ω_o away
 /// from it (the lobe's axis meets it at x's foot) or towards an eye 2.6 away;
-/// 4096 directions. Measured (seeds 1–4, worst), gradient error at every d from
-/// 1e-1 to 1e-8: ≤ 0.25% in every row (0.02% in thin fog and ≤ 0.01% at σ_s = 1,
-/// g 0 or 0.6 along ω_o, below 1e-1; 0.04% or less at g 0.99 along ω_o; ≤ 0.04%
+/// 4096 directions. Measured (seeds 1–8, worst), gradient error at every d from
+/// 1e-1 to 1e-8: ≤ 0.27% in every row (0.02% in thin fog and ≤ 0.01% at σ_s = 1,
+/// g 0 or 0.6 along ω_o, below 1e-1; 0.04% or less at g 0.99 along ω_o; ≤ 0.06%
 /// towards the eye). Hessian error (Frobenius) where the reference can tell it:
-/// ≤ 3% at 1e-1 and 2.7% towards the eye at g 0.99, 1e-2; elsewhere ≤ 0.7%; it
+/// ≤ 3.2% at 1e-1 and 1.3–5.5% towards the eye at g 0.99, 1e-2 (seeds 1–2: 3.0%,
+/// 3.9%); elsewhere ≤ 0.7%; it
 /// follows the reference's own noise (central differences of a quadrature with
 /// steps 1e-2 d and 3e-2 d differ by 1%, 9%, 90% at g 0.99, d = 1e-6, 1e-7,
 /// 1e-8, and by 0.2% and more below 1e-3 at σ_s = 1e-4, whose Hessian is tiny):
-/// there it is not checked.
+/// there it is not checked. Towards the eye the Hessian's error depends on the
+/// direction set's orientation (one random turn about z per seed): over seeds
+/// 1–8 it is either ≈ 1e-4 or ≈ 4e-3 at every d from 1e-3 to 1e-7 (seeds 1 and
+/// 3 the latter); before the sets were turned, every seed had the one
+/// orientation, whose error at 1e-4 was ≈ 1e-4, and that d's bounds were 1e-3.
+/// Worst of seeds 1–8 there: 4.3e-3 (g 0.6), 5.4e-3 (g 0.99), 3.1e-3 (g −0.9).
 ///
 /// History. Before stop 36 the probe's lowest rays met the emitter ≈ d/Δθ from
 /// x's foot and the proxy ended there (1700–6800× off at 1e-6); the silhouette
@@ -98,21 +105,21 @@ fn derivatives_next_to_an_emitter() {
             0.6,
             true,
             [8e-3, 1e-3, 1.5e-3, 1.5e-3, 1.5e-3, 1e-3, 1e-3, 1e-3],
-            [0.08, 2e-3, 0.02, 1e-3, 0.012, 0.012, 0.012, 0.1],
+            [0.08, 2e-3, 0.02, 0.012, 0.012, 0.012, 0.012, 0.1],
         ),
         (
             1.0,
             0.99,
             true,
             [1e-3; 8],
-            [0.02, 0.08, 0.02, 1e-3, 0.015, 0.04, no, no],
+            [0.02, 0.08, 0.02, 0.015, 0.015, 0.04, no, no],
         ),
         (
             1.0,
             -0.9,
             true,
             [1.5e-3, 1e-3, 1.5e-3, 1.5e-3, 1e-3, 1e-3, 1e-3, 1e-3],
-            [0.01, 1e-3, 0.01, 1e-3, 0.01, 0.01, 0.01, 0.025],
+            [0.01, 1e-3, 0.01, 0.01, 0.01, 0.01, 0.01, 0.025],
         ),
     ];
     for (sigma_s, g, eye, grad_bounds, hess_bounds) in rows {
