@@ -133,8 +133,19 @@ fn errors(scene: &Scene, x: DVec3, omega_o: DVec3, rays: usize, seed: u64) -> (f
 /// 0.34%; Hessian p90 A 17% / 17% → 6.2% / 7.1%, B 90% / 57% → 8.6% / 4.1%, C 17% /
 /// 14% → 5.9% / 3.0%. The worst point left (A, 92% for one seed at 16384) sees an
 /// occluder's corner project onto the emitter's edge: two corners in one place.
-/// The test runs seeds 1–2; its bounds hold the measured worst with margin, and
-/// the p90 bound is issue 12's.
+/// Those were one orientation of the direction set: since each seed's set is
+/// turned about z by a random azimuth (unbiased sets), seeds are orientations.
+/// Over seeds 1–8 at 4096 directions, the Hessian's p90 per pair of seeds is A
+/// 0.031–0.093, B 0.068–0.155, C 0.044–0.088, and over the three scenes' 30
+/// points (issue 12's measure: ≥ 20 points in ≥ 2 scenes) 0.062–0.100; at 16384,
+/// B 0.020–0.033. B's worst point, (0.1, −0.567, 0.722), is 23–28% off at every
+/// orientation at 4096 and 0.2–2% at 16384 (one seed 23%): there the plate's
+/// corner passes 0.006 rad inside the emitter's edge, about to cross it, a gap
+/// a ninth of the rays' spacing (0.055 rad). A's worst, (−0.889, 0.122, 0.889),
+/// is 10–300% off at 4096 (the "two corners in one place" above).
+/// The test runs seeds 1–2; its bounds hold the measured worst with margin: the
+/// pooled Hessian p90 bound is issue 12's (15%), each scene's p90 is bounded by
+/// 0.2 (B's worst pair 0.155).
 #[test]
 fn derivatives_at_3d_penumbrae() {
     let rows: [Row; 3] = [
@@ -163,7 +174,7 @@ fn derivatives_at_3d_penumbrae() {
             DVec3::new(1.0, 0.3, 1.0),
         ),
     ];
-    check(&rows, [0.02, 0.06, 0.05, 0.15]);
+    check(&rows, [0.02, 0.06, 0.05, 0.2], 0.15);
 }
 
 /// A scene, its σ_t and g, and the box its penumbra points are taken from.
@@ -171,14 +182,16 @@ type Row = (&'static str, SceneFn, f64, f64, DVec3, DVec3);
 
 /// The gradient's and Hessian's median and p90 errors over each row's penumbra
 /// points (seeds 1–2) at 4096 and 16384 directions, against `bounds` (gradient
-/// median, p90, Hessian median, p90).
-fn check(rows: &[Row], bounds: [f64; 4]) {
+/// median, p90, Hessian median, p90), and the Hessian's p90 over every row's
+/// points against `pooled_h90`.
+fn check(rows: &[Row], bounds: [f64; 4], pooled_h90: f64) {
     let omega_o = DVec3::new(0.48, -0.6, 0.64);
+    let mut pooled: [Vec<f64>; 2] = [vec![], vec![]];
     for &(name, make, sigma_t, g, lo, hi) in rows {
         let scene = make(sigma_t, g);
         let points = penumbra_points(&scene, lo, hi, 10);
         assert!(points.len() >= 8, "{name}: only {} penumbra points", points.len());
-        for rays in [4096, 16384] {
+        for (r, rays) in [4096, 16384].into_iter().enumerate() {
             let (mut ge, mut he) = (vec![], vec![]);
             for seed in 1..=2 {
                 for &x in &points {
@@ -187,6 +200,7 @@ fn check(rows: &[Row], bounds: [f64; 4]) {
                     he.push(b);
                 }
             }
+            pooled[r].extend(&he);
             let (gm, g90) = (percentile(&mut ge.clone(), 0.5), percentile(&mut ge, 0.9));
             let (hm, h90) = (percentile(&mut he.clone(), 0.5), percentile(&mut he, 0.9));
             println!(
@@ -198,6 +212,14 @@ fn check(rows: &[Row], bounds: [f64; 4]) {
             assert!(hm < bhm && h90 < bh90, "{name} {rays}: Hessian median {hm} p90 {h90}");
         }
     }
+    for (errors, rays) in pooled.iter_mut().zip([4096, 16384]) {
+        let h90 = percentile(errors, 0.9);
+        println!("all rows, rays {rays}: {} errors, Hessian p90 {h90:.4}", errors.len());
+        assert!(
+            h90 < pooled_h90,
+            "rays {rays}: Hessian p90 {h90} over every row's points"
+        );
+    }
 }
 
 /// The same at the extremes issue 12 asks for: σ_t = 50 (the penumbrae 25–50 mean
@@ -207,6 +229,13 @@ fn check(rows: &[Row], bounds: [f64; 4]) {
 /// B σ_t 50 0.79% / 10%, 0.22% / 3.0%. Hessian A σ_t 50 2.9% / 13%, 0.92% / 6.4%;
 /// A g 0.99 1.7% / 5.8%, 0.48% / 6.6%; A g −0.99 0.36% / 7.0%, 0.12% / 11%;
 /// B σ_t 50 1.1% / 12%, 0.37% / 4.5%. The Hessian's p90 bound is issue 12's.
+/// Those were one orientation of the direction set. With each seed's set turned
+/// (unbiased sets), the Hessian's p90 at 4096 directions per pair of seeds 1–8 is
+/// A σ_t 50 0.135–0.196, B σ_t 50 0.107–0.189, A g 0.99 0.029–0.093, A g −0.99
+/// 0.071–0.142: at σ_t = 50 and 4096 directions issue 12's 15% holds for seeds
+/// 1–2 (0.145, 0.129) and 3 (A) or 4 (B) of the 7 pairs, not for every
+/// orientation — an open edge of the method, left visible here rather than
+/// bounded away.
 #[test]
 fn derivatives_at_3d_penumbrae_at_extremes() {
     let (lo_a, hi_a) = (DVec3::new(-1.0, -0.6, -1.0), DVec3::new(1.0, 0.4, 1.0));
@@ -223,5 +252,5 @@ fn derivatives_at_3d_penumbrae_at_extremes() {
             DVec3::new(0.6, 0.6, 0.8),
         ),
     ];
-    check(&rows, [0.05, 0.2, 0.05, 0.15]);
+    check(&rows, [0.05, 0.2, 0.05, 0.15], 0.15);
 }
