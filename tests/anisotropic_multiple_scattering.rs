@@ -109,7 +109,7 @@ fn reference_gradient<W: World>(
     let out = Outgoing::Direction(<W::S as Space>::axis(0));
     let h = ReferenceSettings::default().relative_step * world.scale();
     let settings = Settings {
-        max_depth: 32,
+        max_depth: MAX_DEPTH,
         ..Settings::default()
     };
     let refs: Vec<_> = (first_seed..first_seed + seeds)
@@ -139,6 +139,9 @@ fn from_components<S: Space>(c: &[f64]) -> S::Vec {
     c.iter().enumerate().fold(S::zero(), |v, (i, &ci)| v + S::axis(i) * ci)
 }
 
+/// The references' path depth (part of their stored key).
+const MAX_DEPTH: u32 = 32;
+
 /// The stored references' first seed.
 const REFERENCE_SEED: u64 = 101;
 
@@ -155,7 +158,7 @@ fn references<W: World>(
 ) -> Vec<(<W::S as Space>::Vec, f64)> {
     let key = format!(
         "scene {scene_json}\npoints {points:?}\nluminance gradient of multiple scattering towards axis 0, \
-         {spp} spp x seeds {REFERENCE_SEED}..{}, max depth 32, relative step {}",
+         {spp} spp x seeds {REFERENCE_SEED}..{}, max depth {MAX_DEPTH}, relative step {}",
         REFERENCE_SEED + seeds,
         ReferenceSettings::default().relative_step
     );
