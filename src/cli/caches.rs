@@ -72,6 +72,14 @@ pub struct CacheArgs {
     /// Default: the paper's metric alone.
     #[arg(long)]
     pub edge_reach: Option<f64>,
+    /// Limit every record's radii by its multiple-scattering gradient's noise
+    /// (`core::metric::gradient_noise_radius`): the radius at which that noise,
+    /// integrated over the record's ball, adds the error ε allows the Hessian's
+    /// term. Where a record's gradient is mostly noise (few directions, thick or
+    /// forward-scattering fog) it then reaches less far. Ours only (Jarosz 2008
+    /// measures no gradient noise). Off by default, also under --budget (README).
+    #[arg(long)]
+    pub gradient_noise_reach: bool,
     /// Russian roulette of the probes' phase-sampled paths by the phase's weight
     /// of each direction towards ω_o (`ProbeSettings::phase_roulette`: followed
     /// with probability min(1, C·f/f̄)); 0 turns it off. Unbiased; saves rays in
@@ -169,6 +177,7 @@ pub fn cache_settings(scene: &Scene, method: CacheMethod, a: &CacheArgs, fp: &Fi
     cs.second_order = a.second_order;
     (cs.direct_samples, cs.direct_share) = a.direct_for(scene);
     cs.edge_reach = a.edge_reach_for(scene);
+    cs.gradient_noise_reach = a.gradient_noise_reach;
     cs.probe.phase_roulette = a.phase_roulette;
     cs.record_noise = a.record_noise.target();
     cs
@@ -211,6 +220,8 @@ struct Summary<'a> {
     direct_samples: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     edge_reach: Option<f64>,
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    gradient_noise_reach: bool,
     run: &'a MethodRun,
     reference: &'a ReferenceInfo,
 }
@@ -320,6 +331,7 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         per_part: a.cache.per_part,
         direct_samples: run.direct_samples,
         edge_reach: a.cache.edge_reach_for(&scene),
+        gradient_noise_reach: a.cache.gradient_noise_reach,
         second_order: a.cache.second_order,
         run: &run,
         reference: &ref_info,

@@ -105,6 +105,14 @@ pub struct Cache3dArgs {
     /// Default: the paper's metric alone.
     #[arg(long)]
     pub edge_reach: Option<f64>,
+    /// Limit every record's radii by its multiple-scattering gradient's noise
+    /// (`core::metric::gradient_noise_radius`): the radius at which that noise,
+    /// integrated over the record's ball, adds the error ε allows the Hessian's
+    /// term. Where a record's gradient is mostly noise (few directions, thick or
+    /// forward-scattering fog) it then reaches less far. Ours only (Jarosz 2008
+    /// measures no gradient noise). Off by default, also under --budget (README).
+    #[arg(long)]
+    pub gradient_noise_reach: bool,
     /// Light reflected by the first surface: path traced per camera sample
     /// (`none`), or its indirect part from an occlusion-aware second-order
     /// irradiance cache on the surfaces, direct light sampled per camera sample
@@ -310,6 +318,7 @@ impl Cache3dArgs {
         cs.second_order = self.second_order;
         cs.direct_samples = self.direct_samples;
         cs.edge_reach = self.edge_reach;
+        cs.gradient_noise_reach = self.gradient_noise_reach;
         cs.probe.phase_roulette = self.phase_roulette;
         cs.record_noise = self.record_noise.target();
         cs.seed = self.cache_seed;

@@ -268,6 +268,36 @@ pub fn second_order_extent<S: Space>(l: f64, hess: S::Mat, grad: S::Vec, p: &Met
     Extent { axes, radii }
 }
 
+/// How far a record may extrapolate with a gradient known only to within noise of
+/// variance `grad_var` (|noise|², summed over the axes): the radius at which the
+/// error that noise adds, integrated over the ball, reaches the εL/2 the seed's
+/// radii allow the second-order remainder (theory.md §6). With σ = √grad_var,
+/// ∫_ball σ |u·e| dV = σ A_d R^{d+1} / (d+1), A_d = ∫ |cos θ| over the unit sphere
+/// = 2 V_{d−1} (4 in 2D, 2π in 3D), so R^{d+1} = (d+1) ε L / (2 A_d σ).
+/// Why: a record's gradient estimate from a few hundred directions is mostly noise
+/// in thick or forward-scattering fog; the extrapolation then shrinks it (and so
+/// leaves out the true gradient), and the metric, which bounds only the Hessian's
+/// term, let such records reach their largest radius. +∞ for an exact gradient
+/// (σ = 0; also Jarosz 2008, which measures none); `r_min` when L, ε or σ is not
+/// finite, or L or ε is zero. Never NaN.
+pub fn gradient_noise_radius<S: Space>(l: f64, grad_var: f64, p: &MetricParams) -> f64 {
+    let b = Bounds::of(p);
+    if grad_var == 0.0 {
+        return f64::INFINITY;
+    }
+    let l_eff = l.abs().max(b.floor);
+    let sigma = grad_var.sqrt();
+    if !(l_eff.is_finite() && sigma.is_finite() && l_eff > 0.0 && b.eps > 0.0) {
+        return b.r_min;
+    }
+    let n = S::DIM as f64;
+    let a = if S::DIM == 2 { 4.0 } else { 2.0 * std::f64::consts::PI };
+    // Roots factor by factor, as in the seed's radii, so that nothing overflows.
+    let inv = 1.0 / (n + 1.0);
+    let r = ((n + 1.0) / (2.0 * a)).powf(inv) * b.eps.powf(inv) * (l_eff / sigma).powf(inv);
+    if r.is_nan() { b.r_min } else { r.max(b.r_min) }
+}
+
 /// The Jarosz et al. 2008 baseline (theory.md §4): isotropic R = ε L / ‖∇L‖,
 /// ‖∇L‖ = 0 ⇒ r_max, L → 0 or ε = 0 ⇒ r_min (also when ∇L = 0 too), then
 /// [r_min, r_max]. With `limit_by_gradient` also R ≤ L/‖∇L‖ (binds only for ε > 1).

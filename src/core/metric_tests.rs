@@ -364,3 +364,40 @@ fn never_nan_for_wild_inputs() {
     let e = second_order_extent::<D2>(1.0, DMat2::IDENTITY, DVec2::X, &bad);
     assert!(e.radii.is_finite() && e.radii.min_element() > 0.0);
 }
+
+/// At the gradient-noise radius the noise's error integrated over the ball,
+/// ∫ σ |u·e| dV (a midpoint rule in polar / spherical coordinates), is εL/2, in
+/// 2D and 3D; it falls as σ^{−1/(d+1)}; exact gradients and bad input are safe.
+#[test]
+fn gradient_noise_radius_spends_the_seeds_error() {
+    let p = open(0.02);
+    let (l, var) = (3.0, 0.5);
+    let sigma: f64 = 0.5f64.sqrt();
+    let n = 400;
+    let h = |k: usize| (k as f64 + 0.5) / n as f64;
+    // 2D: ∫_0^R r² dr ∫ |cos φ| dφ.
+    let r2 = gradient_noise_radius::<D2>(l, var, &p);
+    let radial2: f64 = (0..n).map(|k| (h(k) * r2).powi(2) * r2 / n as f64).sum();
+    let angular2: f64 = (0..n).map(|k| (TAU * h(k)).cos().abs() * TAU / n as f64).sum();
+    assert!(close(sigma * radial2 * angular2, p.eps * l / 2.0, 1e-4), "2D");
+    // 3D: ∫_0^R r³ dr ∫ |cos θ| sin θ dθ dφ.
+    let r3 = gradient_noise_radius::<D3>(l, var, &p);
+    let radial3: f64 = (0..n).map(|k| (h(k) * r3).powi(3) * r3 / n as f64).sum();
+    let polar: f64 = (0..n)
+        .map(|k| (PI * h(k)).cos().abs() * (PI * h(k)).sin() * PI / n as f64)
+        .sum();
+    assert!(close(sigma * radial3 * polar * TAU, p.eps * l / 2.0, 1e-4), "3D");
+    let quarter = gradient_noise_radius::<D3>(l, var * 16.0, &p);
+    assert!(close(quarter, r3 * 4f64.powf(-0.25), 1e-12));
+    assert_eq!(gradient_noise_radius::<D3>(l, 0.0, &p), f64::INFINITY);
+    for (l, var) in [
+        (f64::NAN, 1.0),
+        (1.0, f64::NAN),
+        (1.0, f64::INFINITY),
+        (0.0, 1.0),
+        (f64::INFINITY, 1.0),
+    ] {
+        assert_eq!(gradient_noise_radius::<D2>(l, var, &p), p.r_min, "{l} {var}");
+    }
+    assert_eq!(gradient_noise_radius::<D2>(1.0, 1e300, &p), p.r_min);
+}

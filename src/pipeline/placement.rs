@@ -23,6 +23,7 @@ use super::sight::{Near, near_record, near_table, sees_near};
 use super::world::World;
 use crate::core::cache::{Cache, Record};
 use crate::core::color::Rgb;
+use crate::core::metric::gradient_noise_radius;
 use crate::core::taylor_rgb::TaylorRgb;
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
@@ -172,6 +173,10 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
                     .extent(&value.luminance(), d.metric_hessian(cached[c]), &metric);
                 if let Some(k) = cs.edge_reach {
                     extent = extent.within((k * d.nearest_edge).max(metric.r_min));
+                }
+                if cs.gradient_noise_reach {
+                    let l = value.luminance().value;
+                    extent = extent.within(gradient_noise_radius::<W::S>(l, d.multiple_grad_var, &metric));
                 }
                 // The extent follows the measured gradient; the extrapolation uses
                 // it less where it is mostly noise (`RecordData::payload_to_extrapolate`).

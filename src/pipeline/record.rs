@@ -79,6 +79,13 @@ pub struct CacheSettings {
     /// peaks around it. None: the paper's metric alone.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub edge_reach: Option<f64>,
+    /// Limit every radius of ours' records to
+    /// [`crate::core::metric::gradient_noise_radius`] of their multiple-scattering
+    /// gradient's noise ([`RecordData::multiple_grad_var`]): a record whose
+    /// gradient is mostly noise extrapolates (with that gradient shrunk) no farther
+    /// than its noise allows at ε. Off by default (the paper's metric alone).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub gradient_noise_reach: bool,
     /// Extrapolate with each record's multiple-scattering gradient shrunk by its own
     /// noise ([`RecordData::payload_to_extrapolate`]); its extent still follows the
     /// measured gradient. On by default: on a point light in thick g = 0.85 fog
@@ -126,6 +133,7 @@ impl CacheSettings {
             direct_samples: None,
             direct_share: None,
             edge_reach: None,
+            gradient_noise_reach: false,
             shrink_noisy_gradients: true,
             record_noise: None,
         }
