@@ -279,7 +279,7 @@ pub fn second_order_extent<S: Space>(l: f64, hess: S::Mat, grad: S::Vec, p: &Met
 /// leaves out the true gradient), and the metric, which bounds only the Hessian's
 /// term, let such records reach their largest radius. +∞ for an exact gradient
 /// (σ = 0; also Jarosz 2008, which measures none); `r_min` when L, ε or σ is not
-/// finite, or L or ε is zero. Never NaN.
+/// finite, or ε or L (raised to the luminance floor) is zero. Never NaN.
 pub fn gradient_noise_radius<S: Space>(l: f64, grad_var: f64, p: &MetricParams) -> f64 {
     let b = Bounds::of(p);
     if grad_var == 0.0 {

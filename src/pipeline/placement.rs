@@ -168,15 +168,14 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             records_seconds += d.seconds;
             for c in missing {
                 let value = d.payload(cached[c]);
-                let mut extent = cs
-                    .method
-                    .extent(&value.luminance(), d.metric_hessian(cached[c]), &metric);
+                let luminance = value.luminance();
+                let mut extent = cs.method.extent(&luminance, d.metric_hessian(cached[c]), &metric);
                 if let Some(k) = cs.edge_reach {
                     extent = extent.within((k * d.nearest_edge).max(metric.r_min));
                 }
                 if cs.gradient_noise_reach {
-                    let l = value.luminance().value;
-                    extent = extent.within(gradient_noise_radius::<W::S>(l, d.multiple_grad_var, &metric));
+                    let reach = gradient_noise_radius::<W::S>(luminance.value, d.multiple_grad_var, &metric);
+                    extent = extent.within(reach);
                 }
                 // The extent follows the measured gradient; the extrapolation uses
                 // it less where it is mostly noise (`RecordData::payload_to_extrapolate`).
