@@ -5,6 +5,8 @@
 //! hundred directions shrink their noisy gradients away and, at the metric's
 //! radii, extrapolate the light's sharp falloff as a constant; limited, they do not.
 
+mod common;
+
 use volcache::flatland::cached_field::{CacheMethod, CacheSettings, RecordMemo, render_cached};
 use volcache::flatland::field::{FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
@@ -73,7 +75,7 @@ fn noisy_gradients_reach_less_far_in_2d() {
 fn render3d_takes_the_gradient_noise_reach() {
     let d = tempfile::tempdir().unwrap();
     let scene = d.path().join("hanging.json");
-    std::fs::write(&scene, HANGING).unwrap();
+    std::fs::write(&scene, common::HANGING_LAMP_3D).unwrap();
     let run = |extra: &[&str]| -> serde_json::Value {
         let out = d.path().join(format!("out{}", extra.len()));
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_volcache"))
@@ -99,16 +101,3 @@ fn render3d_takes_the_gradient_noise_reach() {
     println!("records {} without the reach, {} with it", count(&off), count(&on));
     assert!(count(&on) > count(&off));
 }
-
-/// A small square lamp hanging tilted in strongly forward-scattering fog over a
-/// floor.
-const HANGING: &str = r#"{
-  "camera": {"position": [0.3, 1.0, 3.2], "look_at": [0, 0.9, 0], "fov_deg": 40},
-  "shapes": [
-    {"quad": {"origin": [-2, 0, -2], "u": [0, 0, 4], "v": [4, 0, 0]}, "reflectance": 0.4},
-    {"quad": {"origin": [-0.25, 1.3, -0.1], "u": [0.4, 0.1, 0], "v": [0, -0.25, 0.3]},
-     "reflectance": 0, "emission": [20, 18, 14], "two_sided": true}
-  ],
-  "medium": {"sigma_a": 0.08, "sigma_s": 0.9, "g": 0.85, "region": {"box": {"min": [-1.5, 0, -1.5], "max": [1.5, 2, 1.5]}}},
-  "render": {"resolution": [24, 18], "spp": 16, "seed": 1, "max_depth": 16}
-}"#;

@@ -405,3 +405,22 @@ pub fn noisy_fog_2d() -> volcache::flatland::scene::Scene {
 }"#;
     volcache::flatland::scene::Scene::from_json(json, "<noisy fog 2d>").unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// A small square lamp hanging tilted in strongly forward-scattering fog over a
+/// floor (`gradient_noise_reach.rs`, `gradient_noise.rs`).
+pub const HANGING_LAMP_3D: &str = r#"{
+  "camera": {"position": [0.3, 1.0, 3.2], "look_at": [0, 0.9, 0], "fov_deg": 40},
+  "shapes": [
+    {"quad": {"origin": [-2, 0, -2], "u": [0, 0, 4], "v": [4, 0, 0]}, "reflectance": 0.4},
+    {"quad": {"origin": [-0.25, 1.3, -0.1], "u": [0.4, 0.1, 0], "v": [0, -0.25, 0.3]},
+     "reflectance": 0, "emission": [20, 18, 14], "two_sided": true}
+  ],
+  "medium": {"sigma_a": 0.08, "sigma_s": 0.9, "g": 0.85, "region": {"box": {"min": [-1.5, 0, -1.5], "max": [1.5, 2, 1.5]}}},
+  "render": {"resolution": [24, 18], "spp": 16, "seed": 1, "max_depth": 16}
+}"#;
+
+/// [`HANGING_LAMP_3D`], parsed.
+pub fn hanging_lamp_3d() -> volcache::volume::scene::Scene {
+    volcache::volume::scene::Scene::from_json(HANGING_LAMP_3D, "<hanging lamp 3d>", Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
