@@ -464,9 +464,11 @@ fn tiles_sharing_records_merge_into_the_full_render() {
         );
     };
     let path = |p: &str| d.join(p).display().to_string();
+    // A fixed ε: the equal-count search (tested on the staircase and by `figure
+    // compare3d`) took 75 of this test's 80 s.
     run(&[
-        "--caches",
-        "40",
+        "--eps",
+        "0.1",
         "--records-out",
         &path("records.json"),
         "--out",
@@ -476,7 +478,7 @@ fn tiles_sharing_records_merge_into_the_full_render() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("full/fog_box_ours.json")).unwrap()).unwrap();
     let records = json["cache"]["records"].as_u64().unwrap();
-    assert!((records as i64 - 40).abs() <= 4, "{records} records");
+    assert!(records > 10, "{records} records");
     assert_eq!(json["cache"]["uncovered"], 0);
     assert!(json["cache"]["placement_seconds"].as_f64().unwrap() > 0.0);
     // Two tiles are not the image; the same tile twice covers rows twice.
