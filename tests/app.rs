@@ -314,6 +314,37 @@ fn a_compare_run_finishes_with_finite_numbers_for_both_methods() {
     assert!(!h.state().show_compare && h.state().compare_starts() == 2);
 }
 
+/// The compare panel's "reach ≤ gradient noise" reaches the parameters, restarts
+/// the comparison and is carried by the command that reproduces it.
+#[test]
+fn the_gradient_noise_reach_box_reaches_the_comparison() {
+    let mut wb = workbench();
+    tiny_compare(&mut wb);
+    // Tall enough that the open "Methods" section is on screen unscrolled.
+    let mut h = app_common::harness_sized(wb, [1280.0, 1600.0]);
+    h.get_by_label("Compare view").click();
+    h.step();
+    assert_eq!(h.state().compare_starts(), 1);
+    assert!(
+        !h.state_mut()
+            .compare_command()
+            .unwrap()
+            .contains("--gradient-noise-reach")
+    );
+    h.get_by_label("Methods").click(); // closed by default
+    h.run_steps(2);
+    h.get_by_label("reach ≤ gradient noise").click();
+    h.step();
+    assert!(h.state().compare_params.gradient_noise_reach);
+    assert_eq!(h.state().compare_starts(), 2);
+    assert!(
+        h.state_mut()
+            .compare_command()
+            .unwrap()
+            .contains(" --gradient-noise-reach ")
+    );
+}
+
 #[test]
 fn toggling_the_records_and_error_overlays_changes_what_is_drawn() {
     let mut wb = workbench();
@@ -398,6 +429,20 @@ fn params_follow_the_app_resolution_unless_set() {
     assert_eq!(
         compare_command(None, &fp, &tuned, "o"),
         "volcache figure compare --caches 150 --rays 512 --steps 16 --direct-samples 32 --edge-reach 0.5 \
+         --res 128x128 --ref-spp 256 --seed 7 --out o"
+    );
+    // The gradient-noise reach reaches ours' settings (Jarosz 2008 measures no
+    // gradient noise) and the command.
+    let noisy = CompareParams {
+        gradient_noise_reach: true,
+        ..p.clone()
+    };
+    assert!(noisy.cache_settings(CacheMethod::Ours, &fp).gradient_noise_reach);
+    assert!(!noisy.cache_settings(CacheMethod::Jarosz08, &fp).gradient_noise_reach);
+    assert!(!p.cache_settings(CacheMethod::Ours, &fp).gradient_noise_reach);
+    assert_eq!(
+        compare_command(None, &fp, &noisy, "o"),
+        "volcache figure compare --caches 150 --rays 512 --steps 16 --gradient-noise-reach \
          --res 128x128 --ref-spp 256 --seed 7 --out o"
     );
 }

@@ -40,6 +40,9 @@ pub struct CompareParams {
     /// Records reach no farther than this multiple of their distance to the
     /// nearest edge they see (`--edge-reach`).
     pub edge_reach: Option<f64>,
+    /// Ours' records reach no farther than their gradient's noise allows at ε
+    /// (`--gradient-noise-reach`; Jarosz 2008 measures no gradient noise).
+    pub gradient_noise_reach: bool,
 }
 
 impl Default for CompareParams {
@@ -52,6 +55,7 @@ impl Default for CompareParams {
             ref_spp: 256,
             direct_samples: None,
             edge_reach: None,
+            gradient_noise_reach: false,
         }
     }
 }
@@ -71,13 +75,15 @@ impl CompareParams {
     }
 
     /// The cache settings of `method` (as `volcache caches`' defaults with these
-    /// rays, steps, seed, straight-light samples and edge reach).
+    /// rays, steps, seed, straight-light samples, edge reach and gradient-noise
+    /// reach, the last for ours only).
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
         let mut cs = field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps);
         cs.direct_samples = self.direct_samples.map(|n| n.max(1));
         cs.edge_reach = self
             .edge_reach
             .map(|k| k.clamp(crate::limits::EDGE_REACH.0, crate::limits::EDGE_REACH.1));
+        cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         cs
     }
 
@@ -222,7 +228,10 @@ pub fn compare_command(scene: Option<&str>, fp: &FieldParams, p: &CompareParams,
     let direct = cs
         .direct_samples
         .map_or(String::new(), |n| format!(" --direct-samples {n}"));
-    let reach = cs.edge_reach.map_or(String::new(), |k| format!(" --edge-reach {k}"));
+    let mut reach = cs.edge_reach.map_or(String::new(), |k| format!(" --edge-reach {k}"));
+    if cs.gradient_noise_reach {
+        reach += " --gradient-noise-reach";
+    }
     format!(
         "volcache figure compare{} --caches {} --rays {} --steps {}{direct}{reach} --res {}x{} --ref-spp {} --seed {} --out {}",
         scene.map_or(String::new(), |s| format!(" {}", shell_quote(s))),

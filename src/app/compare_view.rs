@@ -132,6 +132,9 @@ impl Workbench {
                 .accessible_name("edge reach");
             p.edge_reach = limited.then_some(k);
             ui.end_row();
+            ui.checkbox(&mut p.gradient_noise_reach, "reach ≤ gradient noise")
+                .on_hover_text("Ours' records reach no farther than where their multiple-scattering gradient's noise adds the error ε allows (--gradient-noise-reach): pays where the records' gradients are noise and their light varies, as around a lamp in forward-scattering fog");
+            ui.end_row();
             let l = ui.label("compare reference spp");
             ui.add(DragValue::new(&mut p.ref_spp).range(1..=1_000_000).speed(10.0))
                 .labelled_by(l.id);
