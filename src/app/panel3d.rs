@@ -187,6 +187,26 @@ impl Workbench3d {
                          records on the surfaces, direct light sampled per camera sample \
                          (render3d --surface-cache ours); off: reflected light path traced.",
                     );
+                let mut limited = p.edge_reach.is_some();
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut limited, "reach ≤ edge distance ×").on_hover_text(
+                        "Records reach no farther than this multiple of their distance to the nearest \
+                         silhouette edge they see (render3d --edge-reach)",
+                    );
+                    let mut k = p.edge_reach.unwrap_or(1.0);
+                    ui.add_enabled(limited, egui::DragValue::new(&mut k).range(0.01..=100.0).speed(0.05))
+                        .accessible_name("edge reach");
+                    p.edge_reach = limited.then_some(k);
+                });
+                if p.method == Method3d::Ours {
+                    ui.checkbox(&mut p.gradient_noise_reach, "reach ≤ gradient noise")
+                        .on_hover_text(
+                            "Records reach no farther than where their multiple-scattering gradient's noise \
+                         adds the error ε allows (render3d --gradient-noise-reach): pays where the \
+                         records' gradients are noise and their light varies, as around a lamp in \
+                         forward-scattering fog",
+                        );
+                }
             }
         }
     }

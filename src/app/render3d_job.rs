@@ -93,6 +93,12 @@ pub struct View3dParams {
     /// Caches: the first surfaces' reflected light from a surface cache at the
     /// scene-relative ε (`render3d --surface-cache ours`), not path traced.
     pub surface_cache: bool,
+    /// Caches: records reach no farther than this multiple of their distance to
+    /// the nearest silhouette edge they see (`render3d --edge-reach`).
+    pub edge_reach: Option<f64>,
+    /// Ours: records reach no farther than their multiple-scattering gradient's
+    /// noise allows at ε (`render3d --gradient-noise-reach`).
+    pub gradient_noise_reach: bool,
 }
 
 impl View3dParams {
@@ -112,6 +118,8 @@ impl View3dParams {
             seed: scene.desc.render.seed,
             moment_bands: None,
             surface_cache: false,
+            edge_reach: None,
+            gradient_noise_reach: false,
         }
     }
 
@@ -144,6 +152,11 @@ impl View3dParams {
         let (mut cs, mut cp) = cache_settings(scene, image, method, self.eps, self.rays, self.steps);
         cs.moment_bands = self.moment_bands;
         cp.surface_eps = self.surface_cache.then(|| default_surface_eps(scene));
+        cs.edge_reach = self
+            .edge_reach
+            .map(|k| k.clamp(crate::limits::EDGE_REACH.0, crate::limits::EDGE_REACH.1));
+        // Jarosz 2008 measures no gradient noise: the reach would be infinite.
+        cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         (cs, cp)
     }
 }

@@ -344,6 +344,12 @@ impl Workbench3d {
             if self.params.surface_cache {
                 c += " --surface-cache ours";
             }
+            if let Some(k) = self.params.edge_reach {
+                c += &format!(" --edge-reach {k}");
+            }
+            if self.params.gradient_noise_reach && f.method == Method3d::Ours {
+                c += " --gradient-noise-reach";
+            }
         }
         if f.carried > 0 {
             c += &format!(
