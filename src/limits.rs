@@ -72,6 +72,12 @@ pub const GRADING: (f64, f64) = (0.0, 30.0);
 /// distance (`--edge-reach`): below 0.01 every record shrinks to the smallest
 /// radius (one per query point); above 100 it limits nothing.
 pub const EDGE_REACH: (f64, f64) = (0.01, 100.0);
+
+/// An edge reach brought into [`EDGE_REACH`] (the app's fields, which the CLI
+/// would refuse outside it).
+pub fn clamp_edge_reach(k: f64) -> f64 {
+    k.clamp(EDGE_REACH.0, EDGE_REACH.1)
+}
 /// `--record-noise`: a relative standard error (below 1e-4 a record would want
 /// millions of directions).
 pub const RECORD_NOISE: (f64, f64) = (1e-4, 10.0);

@@ -89,9 +89,8 @@ fn the_noise_estimate_follows_the_gradients_spread() {
 
 /// The same in 3D, on a lamp hanging in g = 0.85 fog, where the gradient of a
 /// record of 256 directions is mostly noise (|mean|² a tenth of the spread or
-/// less): under
-/// the lamp, beside it, low under it, far and high in a corner, towards the
-/// camera. Measured over three sets of 24 seeds, 256 and 1024 directions: ratios
+/// less): under the lamp, beside it, low under it, far and high in a corner,
+/// towards the camera. Measured over three sets of 24 seeds, 256 and 1024 directions: ratios
 /// 0.71–1.44 (mean 1.07), so the estimate does not err high next to the lamp and
 /// the gradient-noise reach's extra records there answer real noise; bounds
 /// 0.5–2.

@@ -80,9 +80,7 @@ impl CompareParams {
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
         let mut cs = field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps);
         cs.direct_samples = self.direct_samples.map(|n| n.max(1));
-        cs.edge_reach = self
-            .edge_reach
-            .map(|k| k.clamp(crate::limits::EDGE_REACH.0, crate::limits::EDGE_REACH.1));
+        cs.edge_reach = self.edge_reach.map(crate::limits::clamp_edge_reach);
         cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         cs
     }

@@ -152,9 +152,7 @@ impl View3dParams {
         let (mut cs, mut cp) = cache_settings(scene, image, method, self.eps, self.rays, self.steps);
         cs.moment_bands = self.moment_bands;
         cp.surface_eps = self.surface_cache.then(|| default_surface_eps(scene));
-        cs.edge_reach = self
-            .edge_reach
-            .map(|k| k.clamp(crate::limits::EDGE_REACH.0, crate::limits::EDGE_REACH.1));
+        cs.edge_reach = self.edge_reach.map(crate::limits::clamp_edge_reach);
         // Jarosz 2008 measures no gradient noise: the reach would be infinite.
         cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         (cs, cp)
