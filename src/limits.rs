@@ -78,6 +78,7 @@ pub const EDGE_REACH: (f64, f64) = (0.01, 100.0);
 pub fn clamp_edge_reach(k: f64) -> f64 {
     k.clamp(EDGE_REACH.0, EDGE_REACH.1)
 }
+
 /// `--record-noise`: a relative standard error (below 1e-4 a record would want
 /// millions of directions).
 pub const RECORD_NOISE: (f64, f64) = (1e-4, 10.0);
