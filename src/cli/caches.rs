@@ -38,8 +38,8 @@ pub struct CacheArgs {
     /// (ε 0.001), then on smaller ε and more directions alike (below B = 1, on
     /// fewer directions and larger ε). Sets --eps and --rays, and where the scene
     /// has emitting segments the straight light's samples per pixel (a quarter of
-    /// the placement's rays per pixel at B = 1, that share falling as 1/√B;
-    /// --direct-samples overrides), and --edge-reach max(1, 4√(ε/0.025)) unless
+    /// the placement's rays per pixel at B = 1 and 128² pixels, that share falling
+    /// as 1/√B and scaled by (pixels/128²)^(2/3); --direct-samples overrides), and --edge-reach max(1, 4√(ε/0.025)) unless
     /// given; for ours only (the model was measured for ours).
     #[arg(long, conflicts_with_all = ["eps", "caches", "rays"])]
     pub budget: Option<f64>,

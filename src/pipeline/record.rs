@@ -64,7 +64,8 @@ pub struct CacheSettings {
     /// With [`Self::direct_samples`], in 2D fields (`flatland::cached_field`; 3D
     /// images sample per march point and ignore it): raise the straight light's
     /// samples per point to this share of the placement's rays per point served
-    /// (two rays a sample), so that a scene whose records are dense, and costly
+    /// (two rays a sample; at 128² points, scaled by (points/128²)^(2/3): see
+    /// `super::budget::shared_direct_samples`), so that a scene whose records are dense, and costly
     /// per pixel, samples its straight light in proportion. Set by a 2D budget
     /// (`super::budget::flatland_direct_share`).
     #[serde(skip_serializing_if = "Option::is_none")]
