@@ -124,9 +124,10 @@ pub const FLATLAND_DIRECT_SHARE_POINTS: f64 = 16384.0;
 /// as P^{−1/3}, not as the share's P^{−1}: the records' error does not grow with
 /// the pixels, the straight light's noise per pixel does not fall with them.
 /// Measured (true RMSE, the reference's noise taken out): `forest.json` at
-/// 640×480 budget 4, the plain share's 22 samples 1.42·10⁻³ in 21.9 s, 88 samples
-/// 8.4·10⁻⁴ in 28 s (this rule: ≈ 155); `occluder.json` at 256², budgets 1 / 4 /
-/// 16, plain share 4 / 5 / 11 samples 0.0197 / 0.0233 / 0.0120, 8 / 16 / 32
+/// 640×480 budget 4, the plain share's 22 samples 1.42·10⁻³ in 21.9 s, 88
+/// samples 8.4·10⁻⁴ in 28 s, this rule's 153 7.6·10⁻⁴ in 39 s; `occluder.json` at
+/// 256², budgets 1 / 4 / 16, plain share 4 / 5 / 11 samples 0.0197 / 0.0233 /
+/// 0.0120, 8 / 16 / 32
 /// samples 0.0181 / 0.0213 / 0.0110 at ≤ 1.35× the time; `forest.json` at 40×30,
 /// budgets 1 / 4, plain share 1132 / 1291 samples 1.67 / 0.568·10⁻³ in 2.6 / 5.4
 /// s, 200 samples (this rule: ≈ 200) 1.67 / 0.589·10⁻³ in 2.1 / 4.7 s.
@@ -345,8 +346,9 @@ mod tests {
         assert_eq!(flatland_direct_share(16.0), 0.0625);
         assert_eq!(flatland_direct_share(1e9), flatland_direct_share(MAX_BUDGET));
         // 110 rays per point at a quarter at the measured points: 14 samples; at 8×
-        // the points and the same rays per point (8× the placement's rays) twice
-        // that, at ⅛ the points half (the floor); the floor; no points (one); huge.
+        // the points and the same rays per point (8× the placement's rays) 8^(2/3)
+        // = 4 times that, at ⅛ the points a quarter (3: the floor); the floor; no
+        // points (one); huge.
         let at = FLATLAND_DIRECT_SHARE_POINTS as usize;
         assert_eq!(shared_direct_samples(4, 0.25, 110 * at as u64, at), 14);
         assert_eq!(shared_direct_samples(4, 0.25, 110 * 8 * at as u64, 8 * at), 55);
