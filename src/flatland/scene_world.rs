@@ -52,6 +52,10 @@ impl World for Scene {
         super::geometry::segment_silhouette(&self.geometry.prims[prim as usize], x, d_in, d_out)
     }
 
+    fn nearest_seen_end(&self, x: DVec2, within: f64) -> (f64, u64) {
+        super::seen_ends::nearest_seen_end(self, x, within)
+    }
+
     fn surface(&self, hit: &Hit, dir: DVec2) -> SurfacePoint<D2> {
         let seg = &self.geometry.prims[hit.prim as usize];
         let (normal, active) = seg.facing_dir(dir);

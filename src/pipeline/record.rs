@@ -189,8 +189,9 @@ pub struct RecordData<S: Dim> {
     pub capture_seconds: f64,
     /// Distance from the record's point to the nearest surface edge its light
     /// field sees, where the surface ends (a visibility boundary's silhouette
-    /// point, [`super::silhouette::nearest_boundary`]), or to the nearest point
-    /// light it sees if that is nearer; +∞ when it sees none or
+    /// point, [`super::silhouette::nearest_boundary`]; in 2D also the ends the
+    /// rays passed between, [`super::world::World::nearest_seen_end`]), or to the
+    /// nearest point light it sees if that is nearer; +∞ when it sees none or
     /// when [`CacheSettings::edge_reach`] is not asked for.
     pub nearest_edge: f64,
     /// Noise variance of the multiple part's luminance gradient from its medium
@@ -277,7 +278,7 @@ pub fn compute_record<W: World>(
     let mut lf = capture(world, x, out, &probe, seed, 0, progress)?;
     // Only a placement that limits reach by it pays for the boundary's check.
     let (nearest_edge, edge_rays) = match cs.edge_reach {
-        Some(_) => {
+        Some(k) => {
             // Silhouettes where vertices moved (2D) and where edges were cut (3D).
             let moved = lf
                 .rays
@@ -290,7 +291,10 @@ pub fn compute_record<W: World>(
             let ends: Vec<_> = moved.chain(cut).collect();
             let (edge, rays) = nearest_boundary(world, x, &ends);
             let (light, light_rays) = nearest_point_light(world, &lf, probe.emitted);
-            (edge.min(light), rays + light_rays)
+            // Ends the rays passed between; only those near enough to bind matter.
+            let binding = cs.metric(world.scale()).r_max / k;
+            let (seen, seen_rays) = world.nearest_seen_end(x, edge.min(light).min(binding));
+            (edge.min(light).min(seen), rays + light_rays + seen_rays)
         }
         None => (f64::INFINITY, 0),
     };
