@@ -11,6 +11,7 @@ use volcache::flatland::field::FieldParams;
 use volcache::flatland::scene::Scene;
 use volcache::pipeline::probe::Outgoing;
 use volcache::pipeline::record::compute_record;
+use volcache::pipeline::seen_ends::nearest_seen_end;
 use volcache::pipeline::world::World;
 use volcache::progress::Progress;
 
@@ -111,6 +112,120 @@ fn an_end_seen_edge_on_is_an_edge() {
             }
         }
     }
+}
+
+fn flat_scene(segments: &str) -> Scene {
+    let json = format!(
+        r#"{{"domain": {{"min": [-1, -1], "max": [1, 1]}}, "segments": [{segments}],
+        "medium": {{"sigma_a": 0.1, "sigma_s": 0.9, "g": 0.0, "region": "everywhere"}},
+        "render": {{"resolution": [8, 8], "spp": 1, "seed": 1}}}}"#
+    );
+    Scene::from_json(&json, "<seen_ends>").unwrap_or_else(|e| panic!("{e}"))
+}
+
+const LEVEL_BAR: &str = r#"{"name": "bar", "a": [-0.35, 0.25], "b": [0.35, 0.25], "reflectance": 0.5}"#;
+
+/// `nearest_seen_end` beside a bar's line, however near (down to 1e-9): the
+/// nearer end, exactly, with at most two rays.
+#[test]
+fn the_geometry_finds_an_end_seen_edge_on_exactly() {
+    let s = flat_scene(LEVEL_BAR);
+    for h in [1e-9, 1e-6, 1e-3, 0.004, 0.05] {
+        for (x0, end) in [(-0.5, -0.35), (0.9, 0.35), (-0.36, -0.35)] {
+            for side in [-1.0, 1.0] {
+                let x = DVec2::new(x0, 0.25 + side * h);
+                let exact = x.distance(DVec2::new(end, 0.25));
+                let (d, rays) = nearest_seen_end(&s, x, 10.0);
+                assert_eq!(d, exact, "{x:?}");
+                assert!(rays <= 2, "{rays}");
+            }
+        }
+    }
+}
+
+/// No end farther than `within` is reported, and an end hidden behind another
+/// segment is passed over for the next one in sight.
+#[test]
+fn only_ends_within_reach_and_in_sight_count() {
+    let s = flat_scene(LEVEL_BAR);
+    let x = DVec2::new(-0.5, 0.3);
+    let exact = x.distance(DVec2::new(-0.35, 0.25));
+    assert_eq!(nearest_seen_end(&s, x, exact * 0.99).0, f64::INFINITY);
+    assert_eq!(nearest_seen_end(&s, x, exact * 1.01).0, exact);
+    // A wall between x and the bar's left end; its own ends are farther.
+    let wall = r#"{"name": "wall", "a": [-0.42, 0.0], "b": [-0.42, 0.5], "reflectance": 0.5}"#;
+    let s = flat_scene(&format!("{LEVEL_BAR}, {wall}"));
+    let (d, _) = nearest_seen_end(&s, x, 10.0);
+    let wall_end = x
+        .distance(DVec2::new(-0.42, 0.5))
+        .min(x.distance(DVec2::new(-0.42, 0.0)));
+    assert_eq!(d, wall_end);
+    assert!(d > exact);
+}
+
+/// Where two segments meet and x sees both, the corner is no silhouette (the
+/// probe's rays see one depth on both sides of it); seen with one face only, it is.
+#[test]
+fn a_corner_seen_from_both_faces_is_no_silhouette() {
+    let l = r#"{"name": "top", "a": [-0.3, 0.2], "b": [0.2, 0.2], "reflectance": 0.5},
+               {"name": "side", "a": [0.2, 0.2], "b": [0.2, -0.3], "reflectance": 0.5}"#;
+    let s = flat_scene(l);
+    let corner = DVec2::new(0.2, 0.2);
+    let x = DVec2::new(0.3, 0.3);
+    let (d, _) = nearest_seen_end(&s, x, 10.0);
+    assert_eq!(
+        d,
+        x.distance(DVec2::new(0.2, -0.3)).min(x.distance(DVec2::new(-0.3, 0.2)))
+    );
+    assert!(d > x.distance(corner) * 1.5, "{d}");
+    // Above the top, short of the side's line: the side is hidden, the corner ends the top.
+    let x = DVec2::new(0.1, 0.5);
+    assert_eq!(nearest_seen_end(&s, x, 10.0).0, x.distance(corner));
+}
+
+/// 3D: a square lamp seen from beside its plane is found at its outline's
+/// nearest point with 256 directions (0.2 rad apart; the lamp subtends 0.001–0.02
+/// rad from these points); an edge of a box where x sees both faces is none, the
+/// box's outline beyond them is.
+#[test]
+fn the_geometry_finds_edges_seen_edge_on_3d() {
+    let json = r#"{
+      "camera": {"position": [0, 1, 3], "look_at": [0, 0.5, 0], "fov_deg": 50},
+      "shapes": [
+        {"quad": {"origin": [-0.25, 1.0, -0.25], "u": [0.5, 0, 0], "v": [0, 0, 0.5]},
+         "reflectance": 0, "emission": [5, 5, 5], "two_sided": true},
+        {"box": {"min": [-0.2, -0.6, -0.2], "max": [0.2, -0.2, 0.2]}, "reflectance": 0.4}
+      ],
+      "medium": {"sigma_a": 0.05, "sigma_s": 0.5, "g": 0.0, "region": {"box": {"min": [-2, -2, -2], "max": [2, 2, 2]}}},
+      "render": {"resolution": [16, 12], "spp": 1, "seed": 1, "max_depth": 4}
+    }"#;
+    let s = volcache::volume::scene::Scene::from_json(json, "<lamp>", std::path::Path::new("."))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, Default::default());
+    (cs.probe.rays, cs.probe.steps, cs.edge_reach) = (256, 2, Some(1.0));
+    for (k, (x, nearest)) in [
+        (DVec3::new(0.5, 1.0 + 1e-6, 0.1), DVec3::new(0.25, 1.0, 0.1)),
+        (DVec3::new(-0.45, 1.0 - 1e-3, 0.0), DVec3::new(-0.25, 1.0, 0.0)),
+        (DVec3::new(0.0, 1.004, 0.5), DVec3::new(0.0, 1.0, 0.25)),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let exact = x.distance(nearest);
+        assert!((nearest_seen_end(&s, x, 10.0).0 - exact).abs() < 1e-5, "{x:?}");
+        let d = compute_record(&s, x, Outgoing::Direction(DVec3::Z), &cs, k as u64, &Progress::new()).unwrap();
+        assert!(
+            (d.nearest_edge - exact).abs() < 1e-5,
+            "{x:?}: {} vs {exact}",
+            d.nearest_edge
+        );
+    }
+    // Beside the box's +x/+z edge, seeing both faces: the nearest outline point
+    // is on the vertical edges' neighbours, the top and bottom rims.
+    let x = DVec3::new(0.25, -0.4, 0.25);
+    let shared = (0.05f64 * 0.05 * 2.0).sqrt();
+    let (d, _) = nearest_seen_end(&s, x, 10.0);
+    assert!(d > 2.0 * shared && d.is_finite(), "{d} vs {shared}");
 }
 
 /// Placement with an edge reach k: every record's radii are at most k × its

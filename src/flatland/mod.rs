@@ -12,6 +12,5 @@ pub mod medium;
 pub mod scene;
 pub mod scene_desc;
 mod scene_world;
-pub mod seen_ends;
 pub mod shipped;
 pub mod validate;

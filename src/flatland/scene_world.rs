@@ -52,8 +52,10 @@ impl World for Scene {
         super::geometry::segment_silhouette(&self.geometry.prims[prim as usize], x, d_in, d_out)
     }
 
-    fn nearest_seen_end(&self, x: DVec2, within: f64) -> (f64, u64) {
-        super::seen_ends::nearest_seen_end(self, x, within)
+    fn primitive_ends(&self, prim: u32, _x: DVec2, out: &mut Vec<(DVec2, DVec2)>) {
+        let seg = &self.geometry.prims[prim as usize];
+        let along = (seg.b - seg.a).normalize_or_zero();
+        out.extend([(seg.a, -along), (seg.b, along)]);
     }
 
     fn surface(&self, hit: &Hit, dir: DVec2) -> SurfacePoint<D2> {

@@ -26,6 +26,7 @@ pub mod probe;
 pub mod proxy;
 mod proxy_cut;
 pub mod record;
+pub mod seen_ends;
 pub mod sensor;
 pub mod sight;
 pub mod silhouette;

@@ -20,6 +20,7 @@ use super::moments::{RecordMoments, combine, moment_derivs, weights_towards};
 use super::path::Settings;
 use super::probe::{LightField, Outgoing, ProbeSettings, capture};
 use super::proxy::build;
+use super::seen_ends::nearest_seen_end;
 use super::silhouette::nearest_boundary;
 use super::world::{DirectLight, World};
 use crate::core::metric::{CacheMethod, MetricParams};
@@ -293,7 +294,7 @@ pub fn compute_record<W: World>(
             let (light, light_rays) = nearest_point_light(world, &lf, probe.emitted);
             // Ends the rays passed between; only those near enough to bind matter.
             let binding = cs.metric(world.scale()).r_max / k;
-            let (seen, seen_rays) = world.nearest_seen_end(x, edge.min(light).min(binding));
+            let (seen, seen_rays) = nearest_seen_end(world, x, edge.min(light).min(binding));
             (edge.min(light).min(seen), rays + light_rays + seen_rays)
         }
         None => (f64::INFINITY, 0),

@@ -118,14 +118,11 @@ pub trait World: Sync {
         None
     }
 
-    /// Distance from `x` to the nearest end of a surface within `within` that `x`
-    /// sees as a silhouette, found from the geometry, and the rays cast; +∞ when
-    /// none, or when the world cannot tell (3D, where the probe's cuts find
-    /// silhouette edges). Why: a probe finds ends between its rays, and a surface
-    /// seen nearly edge-on can fall between two of them (2D: `flatland::seen_ends`).
-    fn nearest_seen_end(&self, _x: VecOf<Self>, _within: f64) -> (f64, u64) {
-        (f64::INFINITY, 0)
-    }
+    /// Where primitive `prim` ends nearest `x`, into `out`: points of its boundary
+    /// (2D: the segment's two ends; 3D: the point of each triangle edge nearest x),
+    /// each with the unit direction, in the primitive's plane, that leaves it
+    /// there; for [`super::seen_ends::nearest_seen_end`]. Default: none.
+    fn primitive_ends(&self, _prim: u32, _x: VecOf<Self>, _out: &mut Vec<(VecOf<Self>, VecOf<Self>)>) {}
 
     /// The surface point of `hit`, found by a ray travelling along `dir`.
     fn surface(&self, hit: &Hit, dir: VecOf<Self>) -> SurfacePoint<Self::S>;

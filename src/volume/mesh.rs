@@ -350,6 +350,27 @@ pub fn triangle_edge_through(tri: &Triangle, p: DVec3) -> Option<DVec3> {
     (d != DVec3::ZERO).then_some(d)
 }
 
+/// For each edge of `tri`, its point nearest `x` and the unit direction in the
+/// triangle's plane, across the edge, that leaves the triangle there
+/// (`World::primitive_ends`); degenerate edges are left out.
+pub fn triangle_edge_points(tri: &Triangle, x: DVec3, out: &mut Vec<(DVec3, DVec3)>) {
+    let v = tri.vertices();
+    for k in 0..3 {
+        let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+        let along = b - a;
+        let len2 = along.length_squared();
+        if len2 <= 0.0 {
+            continue;
+        }
+        let q = a + along * ((x - a).dot(along) / len2).clamp(0.0, 1.0);
+        let inwards = (c - a) - along * ((c - a).dot(along) / len2);
+        let leaving = -inwards.normalize_or_zero();
+        if leaving != DVec3::ZERO && q.is_finite() {
+            out.push((q, leaving));
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -57,6 +57,10 @@ impl World for Scene {
         super::mesh::triangle_edge_through(&self.geometry.prims[prim as usize], p)
     }
 
+    fn primitive_ends(&self, prim: u32, x: DVec3, out: &mut Vec<(DVec3, DVec3)>) {
+        super::mesh::triangle_edge_points(&self.geometry.prims[prim as usize], x, out)
+    }
+
     fn surface(&self, hit: &Hit, dir: DVec3) -> SurfacePoint<D3> {
         let tri = &self.geometry.prims[hit.prim as usize];
         let surf = &self.surfaces[tri.shape as usize];
