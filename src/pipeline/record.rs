@@ -190,8 +190,8 @@ pub struct RecordData<S: Dim> {
     pub capture_seconds: f64,
     /// Distance from the record's point to the nearest surface edge its light
     /// field sees, where the surface ends (a visibility boundary's silhouette
-    /// point, [`super::silhouette::nearest_boundary`]; in 2D also the ends the
-    /// rays passed between, [`super::world::World::nearest_seen_end`]), or to the
+    /// point, [`super::silhouette::nearest_boundary`]; also the ends the rays
+    /// passed between, [`super::seen_ends::nearest_seen_end`]), or to the
     /// nearest point light it sees if that is nearer; +∞ when it sees none or
     /// when [`CacheSettings::edge_reach`] is not asked for.
     pub nearest_edge: f64,
@@ -292,10 +292,11 @@ pub fn compute_record<W: World>(
             let ends: Vec<_> = moved.chain(cut).collect();
             let (edge, rays) = nearest_boundary(world, x, &ends);
             let (light, light_rays) = nearest_point_light(world, &lf, probe.emitted);
-            // Ends the rays passed between; only those near enough to bind matter.
+            let near = edge.min(light);
+            // Ends the rays passed between; only nearer ones that can bind matter.
             let binding = cs.metric(world.scale()).r_max / k;
-            let (seen, seen_rays) = nearest_seen_end(world, x, edge.min(light).min(binding));
-            (edge.min(light).min(seen), rays + light_rays + seen_rays)
+            let (seen, seen_rays) = nearest_seen_end(world, x, near.min(binding));
+            (near.min(seen), rays + light_rays + seen_rays)
         }
         None => (f64::INFINITY, 0),
     };
