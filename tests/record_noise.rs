@@ -60,8 +60,13 @@ fn mean_and_variance(v: &[f64]) -> (f64, f64) {
 }
 
 /// The estimated noise variance of one light field's value against the value's
-/// spread over `n` seeds: within a factor 0.5–4 (it counts the integrand's change
+/// spread over 64 seeds: within a factor 0.5–4 (it counts the integrand's change
 /// across a stratum as noise, so it errs high; measured ratios in the printout).
+/// The spread of a heavy-tailed value over few seeds is itself noisy: since the
+/// paths sample the point light along their legs (`pipeline::point_leg`), the 2D
+/// point (0.4, 0.1) gave 0.47 over seeds 300–331 and 0.61 over 300–363
+/// (without the legs 1.01 over 300–363; seeds 1000–1063: 1.20 with them, 1.25
+/// without, and down to 0.55 at (−0.1, 0.8)).
 fn estimate_follows_spread<W: World>(world: &W, points: &[VecOf<W>], out: impl Fn(VecOf<W>) -> Outgoing<VecOf<W>>)
 where
     VecOf<W>: std::fmt::Debug,
@@ -69,7 +74,7 @@ where
     let p = Progress::new();
     let ps = settings::<W::S>(256, 0, None).probe;
     for &x in points {
-        let n = 32;
+        let n = 64;
         let (mut values, mut estimated) = (Vec::new(), 0.0);
         for seed in 0..n {
             let lf = capture(world, x, out(x), &ps, 300 + seed, 0, &p).unwrap();

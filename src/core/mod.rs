@@ -6,6 +6,7 @@ pub mod color;
 pub mod distance;
 pub mod element;
 pub mod equal_count;
+pub mod equiangular;
 pub mod free_flight;
 pub mod graded_rule;
 pub mod harmonics;

@@ -30,7 +30,20 @@ pub fn direct_lights(
     rays: &mut u64,
     each: &mut impl FnMut(DVec2, Rgb),
 ) -> Rgb {
-    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays, each);
+    point_lights(scene, &scene.point_lights, p, lobe, skip, rays, each)
+        + collimated_lights(scene, p, lobe, skip, rays, each)
+}
+
+/// Light from collimated lights arriving at `p` and weighted by `lobe`.
+pub fn collimated_lights(
+    scene: &Scene,
+    p: DVec2,
+    lobe: &Lobe,
+    skip: Option<u32>,
+    rays: &mut u64,
+    each: &mut impl FnMut(DVec2, Rgb),
+) -> Rgb {
+    let mut sum = Rgb::ZERO;
     for l in &scene.collimated_lights {
         let w = -l.direction;
         // The beam reaches p only through its aperture.

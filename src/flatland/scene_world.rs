@@ -70,6 +70,21 @@ impl World for Scene {
         }
     }
 
+    fn point_lights(&self) -> &[crate::pipeline::world::PointLight<D2>] {
+        &self.point_lights
+    }
+
+    fn directional_lights_each(
+        &self,
+        p: DVec2,
+        lobe: &Lobe,
+        skip: Option<u32>,
+        rays: &mut u64,
+        each: &mut impl FnMut(DVec2, Rgb),
+    ) -> Rgb {
+        lights::collimated_lights(self, p, lobe, skip, rays, each)
+    }
+
     fn delta_lights_each(
         &self,
         p: DVec2,

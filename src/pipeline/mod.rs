@@ -22,6 +22,7 @@ pub mod moments_sum;
 pub mod nee;
 pub mod path;
 pub mod placement;
+pub mod point_leg;
 pub mod probe;
 pub mod proxy;
 mod proxy_cut;

@@ -7,17 +7,12 @@
 use super::dim::Dim;
 use super::lobe::Lobe;
 use super::medium::pass_probability;
+pub use super::world::PointLight;
 use super::world::VecOf;
 use super::world::{DirectLight, World};
 use crate::core::color::Rgb;
 use crate::core::mis::power_heuristic;
 use crate::core::space::Space;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointLight<S: Dim> {
-    pub position: S::Vec,
-    pub intensity: Rgb,
-}
 
 /// A light seen from a vertex `p` along the unit direction `w`.
 #[derive(Clone, Copy, Debug)]

@@ -17,6 +17,7 @@
 use super::dim::Dim;
 use super::lobe::{Lobe, phase_log_slope};
 use super::medium::pass_probability;
+use super::point_leg;
 use super::world::{Hit, SurfacePoint, VecOf, World, ignore};
 use crate::core::color::{Rgb, luminance};
 use crate::core::free_flight::Flight;
@@ -35,6 +36,14 @@ pub struct Settings {
     /// How a pixel's (or point's) samples draw their random numbers.
     #[serde(default)]
     pub sampling: Sampling,
+    /// Sample point lights along every leg that passes near them, not only at the
+    /// vertices (`super::point_leg`); off only to measure what it gains.
+    #[serde(default = "yes")]
+    pub point_legs: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Default for Settings {
@@ -43,6 +52,7 @@ impl Default for Settings {
             max_depth: 1024,
             rr_depth: 3,
             sampling: Sampling::default(),
+            point_legs: true,
         }
     }
 }
@@ -161,9 +171,50 @@ pub fn radiance_path<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> (Rgb, FirstEvent) {
+    let r = radiance_path_parts(world, start, dir, skip, lobe_pdf, settings, s, rays);
+    (r.radiance, r.first)
+}
+
+/// What one path brought back (see [`radiance_path_parts`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathRadiance {
+    pub radiance: Rgb,
+    /// What the path met first.
+    pub first: FirstEvent,
+    /// The part of `radiance` that point lights sampled along the first leg
+    /// brought: light scattered by the medium before the first event, even when
+    /// that event is a surface or the path's escape.
+    pub first_leg_scattered: Rgb,
+}
+
+impl PathRadiance {
+    /// The light that the medium scattered towards the start (theory.md §2's
+    /// multiple part when the start scatters itself).
+    pub fn from_medium(&self) -> Rgb {
+        if self.first == FirstEvent::Scatter {
+            self.radiance
+        } else {
+            self.first_leg_scattered
+        }
+    }
+}
+
+/// [`radiance_path`], with the light scattered on the first leg apart.
+#[allow(clippy::too_many_arguments)] // the path state is spelled out
+pub fn radiance_path_parts<W: World>(
+    world: &W,
+    start: VecOf<W>,
+    dir: VecOf<W>,
+    skip: Option<u32>,
+    lobe_pdf: Option<f64>,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> PathRadiance {
     let (mut p, mut dir, mut skip, mut pdf_prev) = (start, dir, skip, lobe_pdf);
     let mut beta = Rgb::ONE;
     let mut l = Rgb::ZERO;
+    let mut first_leg_scattered = Rgb::ZERO;
     let mut first = None;
     let medium = world.medium();
     for depth in 1..=settings.max_depth {
@@ -172,21 +223,32 @@ pub fn radiance_path<W: World>(
         // An unbounded medium ends at the world sphere: paths leaving it escape, so a
         // thin non-absorbing fog cannot keep a path scattering far away forever.
         let s_max = hit.map_or_else(|| world.world_exit(p, dir), |h| h.t);
-        let flight = match medium {
-            Some(m) => m.sample_flight(p, dir, s_max, s),
-            None => Flight::Pass { weight: Rgb::ONE },
+        let leg = medium.map(|m| point_leg::leg(world, m, (p, dir, s_max), settings.point_legs));
+        let flight = match (medium, &leg) {
+            (Some(m), Some(leg)) => {
+                if leg.samples_lights() {
+                    let scattered = beta * leg.scattered(world, m, s, rays);
+                    l += scattered;
+                    if depth == 1 {
+                        first_leg_scattered = scattered;
+                    }
+                }
+                leg.flight(m, s)
+            }
+            _ => Flight::Pass { weight: Rgb::ONE },
         };
-        let lobe = match (flight, hit) {
+        let (lobe, leg_vertex) = match (flight, hit) {
             (Flight::Scatter { t, weight }, _) => {
                 first.get_or_insert(FirstEvent::Scatter);
                 beta *= weight;
                 p += dir * t;
                 skip = None;
                 let m = medium.expect("scattering needs a medium");
-                Lobe::Phase {
+                let lobe = Lobe::Phase {
                     phase: m.phase,
                     travel: dir,
-                }
+                };
+                (lobe, leg.filter(|l| l.samples_lights()).map(|l| (l, t)))
             }
             (Flight::Pass { weight }, None) => {
                 first.get_or_insert(FirstEvent::Escape);
@@ -214,14 +276,25 @@ pub fn radiance_path<W: World>(
                 }
                 p = sp.point;
                 skip = Some(h.prim);
-                Lobe::Lambert {
+                let lobe = Lobe::Lambert {
                     normal: sp.normal,
                     reflectance: sp.reflectance,
-                }
+                };
+                (lobe, None)
             }
         };
         let last = depth == settings.max_depth;
-        l += beta * world.nee(p, &lobe, skip, !last, s, rays);
+        l += beta
+            * match (leg_vertex, medium) {
+                // The point lights' share at a vertex of a leg that also sampled them
+                // is MIS-weighted against those samples.
+                (Some((leg, t)), Some(m)) => {
+                    leg.vertex_point_lights(world, m, (p, t), &lobe, rays)
+                        + world.directional_lights_each(p, &lobe, skip, rays, &mut ignore)
+                        + world.sampled_nee(p, &lobe, skip, !last, s, rays)
+                }
+                _ => world.nee(p, &lobe, skip, !last, s, rays),
+            };
         if last {
             break;
         }
@@ -236,7 +309,11 @@ pub fn radiance_path<W: World>(
             break;
         }
     }
-    (l, first.unwrap_or(FirstEvent::Escape))
+    PathRadiance {
+        radiance: l,
+        first: first.unwrap_or(FirstEvent::Escape),
+        first_leg_scattered,
+    }
 }
 
 /// One sample of ∫ value(ω) L_i(x, ω) dω at `x` for a lobe, times `prefactor`, in
@@ -289,12 +366,11 @@ pub fn sample_at_each<W: World>(
         }
         weight /= keep_path;
     }
-    let (l, first) = radiance_path(world, x, w, skip, Some(pdf), settings, s, rays);
-    let brought = weight * l;
-    match first {
-        FirstEvent::Scatter => parts.multiple += brought,
-        FirstEvent::Surface | FirstEvent::Escape => parts.single += brought,
-    }
+    let path = radiance_path_parts(world, x, w, skip, Some(pdf), settings, s, rays);
+    let brought = weight * path.radiance;
+    let from_medium = weight * path.from_medium();
+    parts.multiple += from_medium;
+    parts.single += brought - from_medium;
     (parts, Some((w, brought)))
 }
 

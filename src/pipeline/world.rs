@@ -58,6 +58,14 @@ pub enum DirectLight<S: Dim> {
     },
 }
 
+/// An isotropic point light of intensity I (W per unit angle or solid angle): it
+/// lights a point at distance r with I·T/r^{d−1} (theory.md §1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight<S: Dim> {
+    pub position: S::Vec,
+    pub intensity: Rgb,
+}
+
 /// Radius of the sphere (circle) where unbounded media end, in scene sizes.
 pub const WORLD_RADIUS: f64 = 1e3;
 
@@ -131,6 +139,21 @@ pub trait World: Sync {
     /// primitive `p` lies on); `each` sees every light's direction and share
     /// (through [`super::nee::light_sample`]).
     fn delta_lights_each(
+        &self,
+        p: VecOf<Self>,
+        lobe: &Lobe<Self::S>,
+        skip: Option<u32>,
+        rays: &mut u64,
+        each: &mut impl FnMut(VecOf<Self>, Rgb),
+    ) -> Rgb;
+    /// The scene's point lights (part of [`World::delta_lights_each`]'s light): the
+    /// path tracer also samples them along its legs (`super::point_leg`).
+    fn point_lights(&self) -> &[PointLight<Self::S>] {
+        &[]
+    }
+    /// [`World::delta_lights_each`] without the point lights: the directional
+    /// delta lights (collimated beams in 2D, suns without a cone in 3D).
+    fn directional_lights_each(
         &self,
         p: VecOf<Self>,
         lobe: &Lobe<Self::S>,

@@ -34,7 +34,19 @@ pub fn delta_lights(
     rays: &mut u64,
     each: &mut impl FnMut(DVec3, Rgb),
 ) -> Rgb {
-    let mut sum = point_lights(scene, &scene.point_lights, p, lobe, skip, rays, each);
+    point_lights(scene, &scene.point_lights, p, lobe, skip, rays, each) + delta_suns(scene, p, lobe, skip, rays, each)
+}
+
+/// Light from suns without a cone arriving at `p` and weighted by `lobe`.
+pub fn delta_suns(
+    scene: &Scene,
+    p: DVec3,
+    lobe: &Lobe,
+    skip: Option<u32>,
+    rays: &mut u64,
+    each: &mut impl FnMut(DVec3, Rgb),
+) -> Rgb {
+    let mut sum = Rgb::ZERO;
     for sun in scene.suns.iter().filter(|s| s.is_delta()) {
         let l = LightSample {
             w: sun.to_sun,

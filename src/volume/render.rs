@@ -12,7 +12,7 @@ use super::camera::Camera;
 use super::scene::Scene;
 use crate::core::color::{Rgb, luminance};
 use crate::core::rng::Sampler;
-use crate::pipeline::path::{FirstEvent, Sampling, Settings, radiance_path};
+use crate::pipeline::path::{Sampling, Settings, radiance_path_parts};
 use crate::pipeline::world::World;
 use crate::progress::{Cancelled, Progress};
 use glam::{DVec2, DVec3};
@@ -164,7 +164,7 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
                     for k in k0..k1 {
                         let mut s = params.settings.sample_stream(params.seed, item, k as u64);
                         let p = DVec2::new(i as f64 + s.next_f64(), j as f64 + s.next_f64());
-                        let (l, first) = radiance_path(
+                        let path = radiance_path_parts(
                             scene,
                             cam.position,
                             cam.direction(p),
@@ -174,8 +174,8 @@ pub fn render(scene: &Scene, params: &RenderParams, progress: &Progress) -> Resu
                             &mut s,
                             &mut r,
                         );
+                        let (l, m) = (path.radiance, path.from_medium());
                         let y = luminance(l);
-                        let m = if first == FirstEvent::Scatter { l } else { Rgb::ZERO };
                         *a = (a.0 + l, a.1 + y, a.2 + y * y, a.3 + m);
                     }
                 }

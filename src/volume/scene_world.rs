@@ -74,6 +74,21 @@ impl World for Scene {
         }
     }
 
+    fn point_lights(&self) -> &[crate::pipeline::world::PointLight<D3>] {
+        &self.point_lights
+    }
+
+    fn directional_lights_each(
+        &self,
+        p: DVec3,
+        lobe: &Lobe,
+        skip: Option<u32>,
+        rays: &mut u64,
+        each: &mut impl FnMut(DVec3, Rgb),
+    ) -> Rgb {
+        lights::delta_suns(self, p, lobe, skip, rays, each)
+    }
+
     fn delta_lights_each(
         &self,
         p: DVec3,
