@@ -498,7 +498,34 @@ pub fn direct_at<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Rgb {
-    let mut l = world.nee(x, lobe, skip, true, s, rays);
+    direct_at_with(world, x, lobe, skip, PointLights::Included, s, rays)
+}
+
+/// Whether a point's straight light includes the point lights' (a camera ray's
+/// march leaves them to `volume::march_lights`, which samples them along the ray).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PointLights {
+    Included,
+    Left,
+}
+
+/// [`direct_at`], with or without the point lights' light.
+pub fn direct_at_with<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    lobe: &Lobe<W::S>,
+    skip: Option<u32>,
+    points: PointLights,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Rgb {
+    let mut l = match points {
+        PointLights::Included => world.nee(x, lobe, skip, true, s, rays),
+        PointLights::Left => {
+            world.directional_lights_each(x, lobe, skip, rays, &mut ignore)
+                + world.sampled_nee(x, lobe, skip, true, s, rays)
+        }
+    };
     let (w, weight, pdf) = lobe.sample(s);
     if weight == Rgb::ZERO {
         return l;
@@ -534,7 +561,7 @@ pub fn direct_mean<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Rgb {
-    direct_spread(world, x, (lobe, scale), n, s, rays).0
+    direct_spread(world, x, (lobe, scale), n, PointLights::Included, s, rays).0
 }
 
 /// What fewer samples of the straight light would have cost a point in variance:
@@ -546,8 +573,8 @@ pub struct DirectSpread {
     pub added: [Option<(u32, f64)>; 2],
 }
 
-/// [`direct_mean`], and the added variance of its set's aligned blocks of n/4
-/// and n/2 samples. A block drawn at random is an estimator of that many samples
+/// [`direct_mean`] (`points`: with or without the point lights), and the added
+/// variance of its set's aligned blocks of n/4 and n/2 samples. A block drawn at random is an estimator of that many samples
 /// whose mean over blocks is the set's (the set is a scrambled Sobol' sequence,
 /// whose aligned blocks are stratified alike): by the law of total variance it
 /// adds the blocks' spread around the set's mean, measured here for free.
@@ -556,6 +583,7 @@ pub fn direct_spread<W: World>(
     x: VecOf<W>,
     (lobe, scale): (&Lobe<W::S>, Rgb),
     n: u32,
+    points: PointLights,
     s: &mut Sampler,
     rays: &mut u64,
 ) -> (Rgb, DirectSpread) {
@@ -569,7 +597,7 @@ pub fn direct_spread<W: World>(
     let mut blocks = [0.0f64; 4];
     let mut sum = Rgb::ZERO;
     for k in 0..n {
-        let v = direct_at(world, x, lobe, None, &mut Sampler::stratified(set, k), rays);
+        let v = direct_at_with(world, x, lobe, None, points, &mut Sampler::stratified(set, k), rays);
         sum += v;
         if halves {
             let b = if quarters { 4 * k / n } else { 2 * (2 * k / n) };

@@ -17,6 +17,7 @@ use crate::core::rng::Sampler;
 use crate::core::space::D3;
 use crate::pipeline::dim::Dim;
 use crate::pipeline::nee::{LightSample, gather, light_sample, point_lights};
+use crate::pipeline::path::PointLights;
 use crate::pipeline::world::{DirectLight, World, ignore};
 use glam::DVec3;
 use std::f64::consts::{PI, TAU};
@@ -191,7 +192,22 @@ pub fn emitter_nee(
 /// with a cone, one cone sample each. No MIS: a radiance cache's probe rays leave
 /// sun cones to this part (see `probe`), so no other strategy samples them.
 pub fn direct_part(scene: &Scene, p: DVec3, lobe: &Lobe, s: &mut Sampler, rays: &mut u64) -> Rgb {
-    let mut sum = delta_lights(scene, p, lobe, None, rays, &mut ignore);
+    direct_part_with(scene, p, lobe, PointLights::Included, s, rays)
+}
+
+/// [`direct_part`], with or without the point lights' light.
+pub fn direct_part_with(
+    scene: &Scene,
+    p: DVec3,
+    lobe: &Lobe,
+    points: PointLights,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Rgb {
+    let mut sum = match points {
+        PointLights::Included => delta_lights(scene, p, lobe, None, rays, &mut ignore),
+        PointLights::Left => delta_suns(scene, p, lobe, None, rays, &mut ignore),
+    };
     for sun in scene.suns.iter().filter(|s| !s.is_delta()) {
         let (u1, u2) = (s.next_f64(), s.next_f64());
         let w = sample_cone(sun.to_sun, sun.cos_max, u1, u2);

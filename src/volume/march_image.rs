@@ -318,8 +318,20 @@ where
                 sp.add(n, c, (luminance(scale), v.direct), (*rays - before, v.direct_rays));
             }
         }
+        if march_point_lights(scene, params) {
+            // A stream of the camera sample's own, so that the cached render and its
+            // path-traced twin draw the same distances (common random numbers).
+            let mut own = Sampler::new2(params.image.seed ^ 0x9017_11E5, pixel as u64, k as u64);
+            medium += super::march_lights::point_lights_along(scene, &ray, dt, &mut own, rays);
+        }
     }
     (at_surface, Some(medium), uncovered, fixed)
+}
+
+/// Are the point lights sampled along each camera ray (`super::march_lights`)
+/// rather than at the march points (which then leave them out)?
+pub(super) fn march_point_lights(scene: &Scene, params: &CachedRenderParams) -> bool {
+    params.image.settings.point_legs && scene.medium.is_some() && !scene.point_lights.is_empty()
 }
 
 /// The image of `n` samples per pixel, `n_marched` of them marched, from their

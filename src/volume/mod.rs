@@ -16,6 +16,7 @@ pub mod camera_march;
 pub mod image_split;
 pub mod lights;
 mod march_image;
+pub mod march_lights;
 pub mod medium;
 pub mod mesh;
 pub mod orbit;

@@ -9,8 +9,9 @@
 
 use super::cached_params::{CacheView, CachedRenderParams};
 use super::lights::Lobe;
+use super::lights::{delta_suns, direct_part_with};
 pub use super::march_image::Reconstruction;
-use super::march_image::{PointLs, SplitMode, march_image};
+use super::march_image::{PointLs, SplitMode, march_image, march_point_lights};
 use super::mesh::Hit;
 use super::scene::Scene;
 use super::surface_cache::surface_radiance;
@@ -18,10 +19,10 @@ use crate::core::color::Rgb;
 use crate::core::rng::{Sampler, mix64};
 use crate::core::space::D3;
 use crate::pipeline::moments::{MomentQuery, weights_towards};
-use crate::pipeline::path::{direct_spread, radiance_leaving, sample_at};
+use crate::pipeline::path::{PointLights, direct_spread, radiance_leaving, sample_at};
 use crate::pipeline::placement::{interpolate, interpolate_moments};
 use crate::pipeline::sight::near_table;
-use crate::pipeline::world::World;
+use crate::pipeline::world::ignore;
 use crate::progress::{Cancelled, Progress};
 use glam::DVec3;
 
@@ -46,6 +47,10 @@ pub fn reconstruct(
     let settings = &params.image.settings;
     let mut surface_scratch: Vec<(usize, f64)> = Vec::new();
     let paths = params.surface_paths;
+    let points = match march_point_lights(scene, params) {
+        true => PointLights::Left,
+        false => PointLights::Included,
+    };
     let surface = move |hit: &Hit, dir: DVec3, s: &mut Sampler, rays: &mut u64| {
         let cached = view.surfaces.and_then(|sc| {
             surface_radiance(
@@ -79,10 +84,10 @@ pub fn reconstruct(
             let (direct, spread) = match view.direct_samples {
                 // The records leave the straight light out: sampled here in full.
                 Some(own) => {
-                    let (d, spread) = direct_spread(scene, p, (lobe, sigma_s), n.unwrap_or(own), s, rays);
+                    let (d, spread) = direct_spread(scene, p, (lobe, sigma_s), n.unwrap_or(own), points, s, rays);
                     (d, Some(spread))
                 }
-                None => (scene.direct_part(p, lobe, s, rays) * sigma_s, None),
+                None => (direct_part_with(scene, p, lobe, points, s, rays) * sigma_s, None),
             };
             let direct_rays = *rays - before;
             let cached = match (view.moments, lobe) {
@@ -119,7 +124,7 @@ pub fn reconstruct(
                 // Not covered (a camera sample beyond the placed ones, or a tile read from
                 // another window's records): path traced, all parts, and counted.
                 None => PointLs {
-                    value: sample_at(scene, p, lobe, None, Rgb::ONE, settings, s, rays).total() * sigma_s,
+                    value: traced_at(scene, p, lobe, points, settings, s, rays) * sigma_s,
                     ..PointLs::default()
                 },
             }
@@ -141,6 +146,10 @@ pub fn march_reference(
     progress: &Progress,
 ) -> Result<Reconstruction, Cancelled> {
     let paths = paths.max(1);
+    let points = match march_point_lights(scene, params) {
+        true => PointLights::Left,
+        false => PointLights::Included,
+    };
     let surface = |hit: &Hit, dir: DVec3, s: &mut Sampler, rays: &mut u64| {
         radiance_leaving(scene, hit, dir, params.surface_paths, &params.image.settings, s, rays).1
     };
@@ -155,7 +164,7 @@ pub fn march_reference(
             let mut s = Sampler::new(path_seed, point);
             let mut sum = Rgb::ZERO;
             for _ in 0..paths {
-                sum += sample_at(scene, p, lobe, None, Rgb::ONE, &params.image.settings, &mut s, rays).total();
+                sum += traced_at(scene, p, lobe, points, &params.image.settings, &mut s, rays);
             }
             PointLs {
                 value: sum * sigma_s / paths as f64,
@@ -164,4 +173,23 @@ pub fn march_reference(
             }
         },
     )
+}
+
+/// One path-traced sample of ∫ f L_i dω at a march point (all parts; without the
+/// point lights' light when the camera ray samples it, `super::march_lights`).
+fn traced_at(
+    scene: &Scene,
+    p: DVec3,
+    lobe: &Lobe,
+    points: PointLights,
+    settings: &crate::pipeline::path::Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> Rgb {
+    let parts = sample_at(scene, p, lobe, None, Rgb::ONE, settings, s, rays);
+    match points {
+        PointLights::Included => parts.total(),
+        // The delta lights' share is deterministic: their directional part alone.
+        PointLights::Left => parts.single + parts.multiple + delta_suns(scene, p, lobe, None, rays, &mut ignore),
+    }
 }
