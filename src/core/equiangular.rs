@@ -8,6 +8,8 @@
 //! - 3D: ∫ dt/(h² + (t−t₀)²) = (θ_b − θ_a)/h with θ = atan((t−t₀)/h);
 //! - 2D: ∫ dt/√(h² + (t−t₀)²) = asinh((t_b−t₀)/h) − asinh((t_a−t₀)/h).
 
+use super::space::Space;
+
 /// The distribution along one ray towards one light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Equiangular {
@@ -37,6 +39,16 @@ impl Equiangular {
             lo: warp(a),
             hi: warp(b),
         }
+    }
+
+    /// The distribution on [a, b] of the ray o + t·d (unit d) towards the point
+    /// `p`, in `S`'s dimension: nearest at t₀ = (p − o)·d, at distance h from the
+    /// line, h taken at least `h_min` (a point on the line has no finite density).
+    pub fn towards<S: Space>((o, d): (S::Vec, S::Vec), p: S::Vec, h_min: f64, (a, b): (f64, f64)) -> Self {
+        let to = p - o;
+        let t0 = S::dot(to, d);
+        let h = S::length(to - d * t0).max(h_min);
+        Self::new(S::DIM, t0, h, a, b)
     }
 
     /// The distance for a uniform number `u` in [0, 1) (inverting the CDF).

@@ -47,32 +47,21 @@ pub fn leg<W: World>(
     use super::medium::Region;
     let pieces: SmallVec<[(f64, f64); 4]> = medium.region.pieces(origin, dir, s_max).into_iter().collect();
     let mut near = SmallVec::new();
-    let (Some(&(a, _)), Some(&(_, b))) = (pieces.first(), pieces.last()) else {
-        return Leg {
-            origin,
-            dir,
-            pieces,
-            near,
-        };
-    };
-    if !sample_lights || medium.sigma_s == Rgb::ZERO || !(b - a).is_finite() || b <= a {
-        return Leg {
-            origin,
-            dir,
-            pieces,
-            near,
-        };
-    }
-    let mean_sigma = medium.sigma_t.element_sum() / 3.0;
-    let reach = (1.0 / mean_sigma).min(0.1 * world.scale());
-    let h_min = 1e-9 * world.scale();
-    for (k, light) in world.point_lights().iter().enumerate() {
-        let to = light.position - origin;
-        let t0 = W::S::dot(to, dir);
-        let nearest = origin + dir * t0.clamp(a, b);
-        if W::S::length(light.position - nearest) < reach {
-            let h = W::S::length(to - dir * t0).max(h_min);
-            near.push((k, Equiangular::new(W::S::DIM, t0, h, a, b)));
+    let span = pieces.first().zip(pieces.last()).map(|(&(a, _), &(_, b))| (a, b));
+    if let Some((a, b)) =
+        span.filter(|&(a, b)| sample_lights && medium.sigma_s != Rgb::ZERO && (b - a).is_finite() && b > a)
+    {
+        let mean_sigma = medium.sigma_t.element_sum() / 3.0;
+        let reach = (1.0 / mean_sigma).min(0.1 * world.scale());
+        let h_min = 1e-9 * world.scale();
+        for (k, light) in world.point_lights().iter().enumerate() {
+            let nearest = origin + dir * W::S::dot(light.position - origin, dir).clamp(a, b);
+            if W::S::length(light.position - nearest) < reach {
+                near.push((
+                    k,
+                    Equiangular::towards::<W::S>((origin, dir), light.position, h_min, (a, b)),
+                ));
+            }
         }
     }
     Leg {

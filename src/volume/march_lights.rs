@@ -16,6 +16,7 @@ use super::scene::Scene;
 use crate::core::color::Rgb;
 use crate::core::equiangular::Equiangular;
 use crate::core::rng::Sampler;
+use crate::core::space::D3;
 use crate::pipeline::nee::point_lights;
 use crate::pipeline::world::{World, ignore};
 
@@ -42,10 +43,7 @@ pub fn point_lights_along(scene: &Scene, ray: &CameraRay, dt: f64, s: &mut Sampl
         .clamp(1.0, super::camera_march::MAX_MARCH_POINTS as f64) as u32;
     let mut sum = Rgb::ZERO;
     for light in &scene.point_lights {
-        let to = light.position - ray.origin;
-        let t_c = to.dot(ray.dir);
-        let h = (to - ray.dir * t_c).length().max(h_min);
-        let eq = Equiangular::new(3, t_c, h, t0, end);
+        let eq = Equiangular::towards::<D3>((ray.origin, ray.dir), light.position, h_min, (t0, end));
         let u0 = s.next_f64();
         for j in 0..n {
             let t = eq.sample((j as f64 + u0) / n as f64).clamp(t0, end);
