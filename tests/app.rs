@@ -421,15 +421,19 @@ fn params_follow_the_app_resolution_unless_set() {
     // command that reproduces the comparison.
     let tuned = CompareParams {
         direct_samples: Some(32),
+        point_scatter: Some(48),
         edge_reach: Some(0.5),
         ..p.clone()
     };
     let cs = tuned.cache_settings(CacheMethod::Ours, &fp);
-    assert_eq!((cs.direct_samples, cs.edge_reach), (Some(32), Some(0.5)));
+    assert_eq!(
+        (cs.direct_samples, cs.point_scatter, cs.edge_reach),
+        (Some(32), Some(48), Some(0.5))
+    );
     assert_eq!(
         compare_command(None, &fp, &tuned, "o"),
-        "volcache figure compare --caches 150 --rays 512 --steps 16 --direct-samples 32 --edge-reach 0.5 \
-         --res 128x128 --ref-spp 256 --seed 7 --out o"
+        "volcache figure compare --caches 150 --rays 512 --steps 16 --direct-samples 32 --point-scatter 48 \
+         --edge-reach 0.5 --res 128x128 --ref-spp 256 --seed 7 --out o"
     );
     // The gradient-noise reach reaches ours' settings (Jarosz 2008 measures no
     // gradient noise) and the command.

@@ -37,6 +37,9 @@ pub struct CompareParams {
     /// The light straight from the lights sampled this many times per pixel, not
     /// cached (`--direct-samples`).
     pub direct_samples: Option<u32>,
+    /// The point lights' once-scattered light sampled per pixel with this many
+    /// directions, not cached (`--point-scatter`).
+    pub point_scatter: Option<u32>,
     /// Records reach no farther than this multiple of their distance to the
     /// nearest edge they see (`--edge-reach`).
     pub edge_reach: Option<f64>,
@@ -54,6 +57,7 @@ impl Default for CompareParams {
             res: None,
             ref_spp: 256,
             direct_samples: None,
+            point_scatter: None,
             edge_reach: None,
             gradient_noise_reach: false,
         }
@@ -75,11 +79,12 @@ impl CompareParams {
     }
 
     /// The cache settings of `method` (as `volcache caches`' defaults with these
-    /// rays, steps, seed, straight-light samples, edge reach and gradient-noise
-    /// reach, the last for ours only).
+    /// rays, steps, seed, straight-light samples, once-scattered point-light
+    /// directions, edge reach and gradient-noise reach, the last for ours only).
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
         let mut cs = field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps);
         cs.direct_samples = self.direct_samples.map(|n| n.max(1));
+        cs.point_scatter = self.point_scatter.map(|n| n.max(1));
         cs.edge_reach = self.edge_reach.map(crate::limits::clamp_edge_reach);
         cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         cs
@@ -223,9 +228,12 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
 /// embedded default scene).
 pub fn compare_command(scene: Option<&str>, fp: &FieldParams, p: &CompareParams, out: &str) -> String {
     let cs = p.cache_settings(CacheMethod::Ours, fp);
-    let direct = cs
+    let mut direct = cs
         .direct_samples
         .map_or(String::new(), |n| format!(" --direct-samples {n}"));
+    if let Some(n) = cs.point_scatter {
+        direct += &format!(" --point-scatter {n}");
+    }
     let mut reach = cs.edge_reach.map_or(String::new(), |k| format!(" --edge-reach {k}"));
     if cs.gradient_noise_reach {
         reach += " --gradient-noise-reach";

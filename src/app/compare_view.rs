@@ -124,6 +124,14 @@ impl Workbench {
                 .accessible_name("straight-light samples per pixel");
             p.direct_samples = per_pixel.then_some(n);
             ui.end_row();
+            let mut per_pixel = p.point_scatter.is_some();
+            ui.checkbox(&mut per_pixel, "lamps' scattered light per pixel")
+                .on_hover_text("Sample the point lights' light scattered once in the fog at every pixel, with this many directions, and cache only the rest (--point-scatter): its peak around a lamp is not extrapolated");
+            let mut n = p.point_scatter.unwrap_or(64);
+            ui.add_enabled(per_pixel, DragValue::new(&mut n).range(1..=4096))
+                .accessible_name("point-light scattering directions per pixel");
+            p.point_scatter = per_pixel.then_some(n);
+            ui.end_row();
             let mut limited = p.edge_reach.is_some();
             ui.checkbox(&mut limited, "reach ≤ edge distance ×")
                 .on_hover_text("Records reach no farther than this multiple of their distance to the nearest surface edge or point light they see (--edge-reach)");

@@ -56,6 +56,10 @@ struct Point {
     /// The records' edge reach (`--edge-reach`, or a budget's).
     #[serde(skip_serializing_if = "Option::is_none")]
     edge_reach: Option<f64>,
+    /// Directions per pixel of the point lights' once-scattered light, where it
+    /// is not cached (`--point-scatter`, or a budget's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    point_scatter: Option<u32>,
     spp: Option<u32>,
     #[serde(flatten)]
     run: MethodRun,
@@ -125,6 +129,8 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                         caches: Some(ours.run.records),
                         rays: schedule(b).1,
                         direct_samples: ours.run.direct_samples,
+                        // The same split as ours: the two caches hold the same light.
+                        point_scatter: Some(args.point_scatter_for(&scene).unwrap_or(0)),
                         ..a.cache.clone()
                     })
                 }
@@ -157,6 +163,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                 budget,
                 rays_per_record: Some(target.rays_per_record()),
                 edge_reach: target.edge_reach_for(&scene),
+                point_scatter: target.point_scatter_for(&scene),
                 spp: None,
                 run,
             });
@@ -175,6 +182,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
             budget: None,
             rays_per_record: None,
             edge_reach: None,
+            point_scatter: None,
             spp: Some(spp),
             run,
         });

@@ -65,6 +65,14 @@ pub struct CacheArgs {
     /// lights per pixel, the rest cached (the paper's split).
     #[arg(long)]
     pub direct_samples: Option<u32>,
+    /// Sample the point lights' light scattered once in the fog on its way to
+    /// every pixel, with this many phase-sampled directions per pixel (one
+    /// equiangular distance per light along each), and cache only the rest: the
+    /// records leave it out. Around a point light it peaks (log 1/r) where records
+    /// extrapolate across. 0 caches it. Default: the budget's under --budget,
+    /// else cached.
+    #[arg(long)]
+    pub point_scatter: Option<u32>,
     /// Limit every record's radii to this multiple of its distance to the nearest
     /// surface edge it sees (a segment's end, a triangle's silhouette edge), where
     /// the light turns with the angle and no Taylor expansion reaches across, or
@@ -144,6 +152,15 @@ impl CacheArgs {
         (self.edge_reach).or_else(|| self.budget.map(|b| budget_settings(scene, b).edge_reach))
     }
 
+    /// `--point-scatter` (0: none), or the budget's.
+    pub fn point_scatter_for(&self, scene: &Scene) -> Option<u32> {
+        match (self.point_scatter, self.budget) {
+            (Some(n), _) => (n > 0).then_some(n),
+            (None, Some(b)) => budget_settings(scene, b).point_scatter,
+            (None, None) => None,
+        }
+    }
+
     /// The straight light's samples per pixel and their share of the placement's
     /// rays: `--direct-samples` (no share), or under `--budget` the budget's where
     /// the scene has lights with an extent (delta lights' straight light is per
@@ -180,6 +197,7 @@ pub fn cache_settings(scene: &Scene, method: CacheMethod, a: &CacheArgs, fp: &Fi
     cs.gradient_noise_reach = a.gradient_noise_reach;
     cs.probe.phase_roulette = a.phase_roulette;
     cs.record_noise = a.record_noise.target();
+    cs.point_scatter = a.point_scatter_for(scene);
     cs
 }
 
@@ -218,6 +236,8 @@ struct Summary<'a> {
     second_order: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     direct_samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    point_scatter: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     edge_reach: Option<f64>,
     #[serde(skip_serializing_if = "std::ops::Not::not")]
@@ -330,6 +350,7 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         budget: a.cache.budget,
         per_part: a.cache.per_part,
         direct_samples: run.direct_samples,
+        point_scatter: run.point_scatter,
         edge_reach: a.cache.edge_reach_for(&scene),
         gradient_noise_reach: a.cache.gradient_noise_reach,
         second_order: a.cache.second_order,

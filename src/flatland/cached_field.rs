@@ -8,6 +8,8 @@
 //! single + multiple scattering, in one cache, or one cache per part (`per_part`).
 //! With `direct_samples`, all light arriving straight from the lights (emitters too)
 //! is sampled per pixel and the records hold only the rest (a field of all parts).
+//! With `point_scatter`, so is the point lights' light scattered once on its way
+//! (`pipeline::point_scatter`): its peak around each light is not cached.
 
 use super::field::{Field, FieldParams};
 use super::lights::Lobe;
@@ -23,6 +25,7 @@ use crate::pipeline::path::direct_mean;
 use crate::pipeline::placement::{
     CountError, Placement, QueryPoint, QuerySource, interpolate, place, place_with_count,
 };
+use crate::pipeline::point_scatter::once_scattered_point_lights;
 use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::Cached;
 use crate::pipeline::sight::{Near, near_table};
@@ -45,21 +48,29 @@ pub struct BudgetSettings {
     pub direct: Option<(u32, f64)>,
     /// `CacheSettings::edge_reach`.
     pub edge_reach: f64,
+    /// `CacheSettings::point_scatter`, where the scene has point lights in fog.
+    pub point_scatter: Option<u32>,
 }
 
 /// What budget `b` (`pipeline::budget::FLATLAND`) sets for ours on `scene`: ε,
 /// directions and the edge reach, and the straight light's samples where the
 /// scene has emitting segments (a delta light's straight light is per pixel at
-/// every budget: samples of it would repeat it).
+/// every budget: samples of it would repeat it), and the point lights'
+/// once-scattered light per pixel where the scene has point lights in fog.
 pub fn budget_settings(scene: &Scene, b: f64) -> BudgetSettings {
-    use crate::pipeline::budget::{FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share, flatland_edge_reach, schedule};
+    use crate::pipeline::budget::{
+        FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share, flatland_edge_reach, flatland_point_scatter, schedule,
+    };
     let (eps, rays) = schedule(b);
     let extended_lights = !scene.emitters.prims.is_empty();
+    let scattering = scene.medium.as_ref().is_some_and(|m| m.sigma_s != Rgb::ZERO);
+    let lamps_in_fog = scattering && !scene.point_lights.is_empty();
     BudgetSettings {
         eps,
         rays,
         direct: extended_lights.then(|| (FLATLAND_DIRECT_MIN_SAMPLES, flatland_direct_share(b))),
         edge_reach: flatland_edge_reach(b),
+        point_scatter: lamps_in_fog.then(|| flatland_point_scatter(b)),
     }
 }
 
@@ -86,6 +97,9 @@ pub struct CachedField {
     pub uncovered_pixels: usize,
     /// Samples per pixel of the straight light, where the records left it out.
     pub direct_samples: Option<u32>,
+    /// Directions per pixel of the point lights' once-scattered light, where the
+    /// records left it out.
+    pub point_scatter: Option<u32>,
 }
 
 impl CachedField {
@@ -153,6 +167,13 @@ pub fn render_cached(
         order: placement_order(fp.width, fp.height),
         omega_o: DVec2::from_angle(fp.omega_o_deg.to_radians()),
     };
+    // The point lights' once-scattered light is taken per pixel only where one
+    // cache holds all scattered light (the records leave it out of that cache).
+    let once_scattered = cs.point_scatter.filter(|_| fp.part == Part::All && !cs.per_part);
+    let cs = &CacheSettings {
+        point_scatter: once_scattered,
+        ..cs.clone()
+    };
     let cached = cached_parts(cs, fp.part);
     let mut placement = match target {
         Some(n) => place_with_count(scene, &source, cs, cached, n, memo, progress)?,
@@ -198,6 +219,13 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                         (Part::All | Part::Direct, _) => scene.direct_part(x, &lobe, &mut s, &mut rays) * m.sigma_s,
                         _ => Rgb::ZERO,
                     };
+                    let once = match cs.point_scatter {
+                        Some(n) if fp.part == Part::All => {
+                            let item = (j * w + i) as u64;
+                            once_scattered_point_lights(scene, x, &lobe, n, (cs.seed, item), &mut rays) * m.sigma_s
+                        }
+                        _ => Rgb::ZERO,
+                    };
                     let cached: Vec<Option<Rgb>> = p
                         .caches
                         .iter()
@@ -208,7 +236,7 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                     let cached: Vec<Rgb> = cached.into_iter().map(|c| c.unwrap_or(Rgb::ZERO)).collect();
                     let v = match (fp.part, per_part) {
                         (Part::Direct, _) => direct,
-                        (Part::All, false) => direct + cached[0],
+                        (Part::All, false) => direct + once + cached[0],
                         (Part::All, true) => direct + cached[0] + cached[1],
                         (Part::Single, _) => cached[0],
                         (Part::Multiple, _) => cached[1],
@@ -238,5 +266,6 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
         reconstruction_rays,
         uncovered_pixels,
         direct_samples: p.direct_samples,
+        point_scatter: cs.point_scatter.filter(|_| fp.part == Part::All),
     }
 }

@@ -23,6 +23,7 @@ pub mod nee;
 pub mod path;
 pub mod placement;
 pub mod point_leg;
+pub mod point_scatter;
 pub mod probe;
 pub mod proxy;
 mod proxy_cut;

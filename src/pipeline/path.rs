@@ -330,7 +330,17 @@ pub fn sample_at<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> Parts {
-    let (parts, _) = sample_at_each(world, x, lobe, skip, 1.0, settings, s, rays, &mut ignore);
+    let (parts, _) = sample_at_each(
+        world,
+        x,
+        lobe,
+        skip,
+        (1.0, PointLights::Included),
+        settings,
+        s,
+        rays,
+        &mut ignore,
+    );
     parts.scaled(prefactor)
 }
 
@@ -338,21 +348,27 @@ pub fn sample_at<W: World>(
 /// sample's direction and share, and the lobe-sampled path comes back as its
 /// direction and what it brought (weight · L), if the lobe drew one and the path
 /// survived its roulette (probability `keep_path`, one draw only when it is below
-/// one; what it brought is then divided by it).
+/// one; what it brought is then divided by it). With `PointLights::Left` the point
+/// lights' straight light at `x` is left out (the caller takes it elsewhere:
+/// `super::point_scatter`); what the path brings is whole.
 #[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn sample_at_each<W: World>(
     world: &W,
     x: VecOf<W>,
     lobe: &Lobe<W::S>,
     skip: Option<u32>,
-    keep_path: f64,
+    (keep_path, points): (f64, PointLights),
     settings: &Settings,
     s: &mut Sampler,
     rays: &mut u64,
     each: &mut impl FnMut(VecOf<W>, Rgb),
 ) -> (Parts, Option<(VecOf<W>, Rgb)>) {
+    let delta = match points {
+        PointLights::Included => world.delta_lights_each(x, lobe, skip, rays, each),
+        PointLights::Left => world.directional_lights_each(x, lobe, skip, rays, each),
+    };
     let mut parts = Parts {
-        direct: world.delta_lights_each(x, lobe, skip, rays, each),
+        direct: delta,
         single: world.sampled_nee_each(x, lobe, skip, true, s, rays, each),
         multiple: Rgb::ZERO,
     };
@@ -383,14 +399,15 @@ pub fn sample_at_each<W: World>(
 /// Why: a probe's medium sample m is seen from x along ω = (m − x)/r, so what m sends
 /// to x turns with x; holding it fixed leaves out ∫ K ∂_ωL·∇_x ω dm, which is
 /// log-divergent near x (∇_x ω ∝ 1/r) wherever f ≠ const and the light at m is
-/// anisotropic. `keep_path`: the lobe-sampled path's roulette ([`sample_at_each`]).
+/// anisotropic. `keep`: the lobe-sampled path's roulette and whether the point
+/// lights' straight light counts ([`sample_at_each`]).
 #[allow(clippy::too_many_arguments)] // the vertex state is spelled out
 pub fn scattered_with_slope<W: World>(
     world: &W,
     x: VecOf<W>,
     phase: <W::S as Dim>::Phase,
     travel: VecOf<W>,
-    keep_path: f64,
+    (keep_path, points): (f64, PointLights),
     settings: &Settings,
     s: &mut Sampler,
     rays: &mut u64,
@@ -403,7 +420,7 @@ pub fn scattered_with_slope<W: World>(
             *c += along * v;
         }
     };
-    let (parts, path) = sample_at_each(world, x, &lobe, None, keep_path, settings, s, rays, &mut tap);
+    let (parts, path) = sample_at_each(world, x, &lobe, None, (keep_path, points), settings, s, rays, &mut tap);
     let (score, path) = path.map_or((W::S::zero(), Rgb::ZERO), |(w, brought)| {
         (phase_log_slope::<W::S>(&phase, travel, w), brought)
     });
@@ -502,8 +519,10 @@ pub fn direct_at<W: World>(
 }
 
 /// Whether a point's straight light includes the point lights' (a camera ray's
-/// march leaves them to `volume::march_lights`, which samples them along the ray).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// march leaves them to `volume::march_lights`, which samples them along the ray;
+/// a 2D field's probes to `super::point_scatter`, which samples them per pixel).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum PointLights {
     Included,
     Left,

@@ -31,7 +31,7 @@
 use super::dim::Dim;
 use super::lobe::Lobe;
 use super::medium::Region;
-use super::path::{ScatteredSample, Settings, radiance_leaving, sample_at_each, scattered_with_slope};
+use super::path::{PointLights, ScatteredSample, Settings, radiance_leaving, sample_at_each, scattered_with_slope};
 use super::silhouette::{Cut, RayEnd, Silhouettes, find_edges};
 use super::world::{DirectLight, Hit, World, ignore};
 use crate::core::color::Rgb;
@@ -90,6 +90,12 @@ pub struct ProbeSettings {
     /// Only for a light field that serves one ω_o (not harmonic moments, not a
     /// surface's irradiance).
     pub phase_roulette: f64,
+    /// Whether the medium samples count the point lights' straight light. `Left`
+    /// when the caller takes the light the point lights send through one
+    /// scattering to every point it serves (`super::point_scatter`,
+    /// [`super::record::CacheSettings::point_scatter`]): the records then hold the
+    /// rest, without the log (2D) or 1/r (3D) peak around each light.
+    pub point_lights: PointLights,
     pub settings: Settings,
 }
 
@@ -112,6 +118,7 @@ impl ProbeSettings {
             slopes: true,
             emitted: true,
             phase_roulette: 0.0,
+            point_lights: PointLights::Included,
             settings: Settings::default(),
         }
     }
@@ -548,8 +555,16 @@ fn trace_field<W: World>(
                     let mut sum = Rgb::ZERO;
                     if m.contains(p) && with_slopes {
                         for _ in 0..paths {
-                            let one =
-                                scattered_with_slope(world, p, m.phase, dir, keep, &ps.settings, &mut s, &mut rays);
+                            let one = scattered_with_slope(
+                                world,
+                                p,
+                                m.phase,
+                                dir,
+                                (keep, ps.point_lights),
+                                &ps.settings,
+                                &mut s,
+                                &mut rays,
+                            );
                             sum += one.value;
                             scattered.push((i, one));
                         }
@@ -557,9 +572,19 @@ fn trace_field<W: World>(
                     } else if m.contains(p) {
                         for _ in 0..paths {
                             let each = &mut ignore;
-                            sum += sample_at_each(world, p, &lobe, None, keep, &ps.settings, &mut s, &mut rays, each)
-                                .0
-                                .total();
+                            sum += sample_at_each(
+                                world,
+                                p,
+                                &lobe,
+                                None,
+                                (keep, ps.point_lights),
+                                &ps.settings,
+                                &mut s,
+                                &mut rays,
+                                each,
+                            )
+                            .0
+                            .total();
                         }
                         sum = sum * m.sigma_s / paths as f64;
                     }

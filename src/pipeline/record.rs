@@ -17,7 +17,7 @@ use super::derivatives::{
 };
 use super::dim::Dim;
 use super::moments::{RecordMoments, combine, moment_derivs, weights_towards};
-use super::path::Settings;
+use super::path::{PointLights, Settings};
 use super::probe::{LightField, Outgoing, ProbeSettings, capture};
 use super::proxy::build;
 use super::seen_ends::nearest_seen_end;
@@ -102,6 +102,15 @@ pub struct CacheSettings {
     /// pay more than more rays. Not a default: no rule won on every scene.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub record_noise: Option<NoiseTarget>,
+    /// Sample the point lights' light scattered once in the medium on its way to
+    /// every point served, with this many directions per point
+    /// (`super::point_scatter::once_scattered_point_lights`), and cache only the
+    /// rest: the records' medium samples leave the point lights' straight light
+    /// out ([`ProbeSettings::point_lights`]). Around a point light that light peaks
+    /// as log(1/r) (2D) or 1/r (3D), a peak records extrapolate across. 2D fields
+    /// of all light (one cache); others ignore it. None: cached.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_scatter: Option<u32>,
 }
 
 /// When a record has enough light fields ([`CacheSettings::record_noise`]).
@@ -138,6 +147,7 @@ impl CacheSettings {
             gradient_noise_reach: false,
             shrink_noisy_gradients: true,
             record_noise: None,
+            point_scatter: None,
         }
     }
 
@@ -267,6 +277,10 @@ pub fn compute_record<W: World>(
     let probe = ProbeSettings {
         slopes: cs.probe.slopes && cs.method == CacheMethod::Ours,
         emitted: cs.probe.emitted && cs.direct_samples.is_none(),
+        point_lights: match cs.point_scatter {
+            Some(_) => PointLights::Left,
+            None => cs.probe.point_lights,
+        },
         // Moments serve every ω_o: no direction may be rouletted by one ω_o's phase.
         phase_roulette: if cs.moment_bands.is_some() {
             0.0

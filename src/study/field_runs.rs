@@ -64,6 +64,10 @@ pub struct MethodRun {
     /// (`CacheSettings::direct_samples`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub direct_samples: Option<u32>,
+    /// Directions per pixel of the point lights' once-scattered light, where the
+    /// records left it out (`CacheSettings::point_scatter`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_scatter: Option<u32>,
     pub errors: Option<FieldErrors>,
 }
 
@@ -164,6 +168,7 @@ pub fn cache_run(
         // placements are not counted).
         seconds_total: seconds,
         direct_samples: f.direct_samples,
+        point_scatter: f.point_scatter,
         errors: Some(field_errors(&f.field, reference)),
         field: f.field,
     })
@@ -189,6 +194,7 @@ pub fn pt_run(
         seconds_reconstruction: r.seconds,
         seconds_total: r.seconds,
         direct_samples: None,
+        point_scatter: None,
         errors: Some(field_errors(&r.field, reference)),
         field: r.field,
     })

@@ -8,17 +8,14 @@
 //! spike whose variance has no bound as the ray passes closer to the light (the
 //! rings of fireflies around a lamp in fog). Equiangular distances follow the
 //! 1/r² peak, so what is left to vary is visibility, phase and transmittance.
-//! The march points then leave the point lights out (`PointLights::Left`).
+//! The march points then leave the point lights out (`PointLights::Left`). The
+//! estimator is the one 2D fields use per pixel (`pipeline::point_scatter`).
 
 use super::camera_march::CameraRay;
-use super::lights::Lobe;
 use super::scene::Scene;
 use crate::core::color::Rgb;
-use crate::core::equiangular::Equiangular;
 use crate::core::rng::Sampler;
-use crate::core::space::D3;
-use crate::pipeline::nee::point_lights;
-use crate::pipeline::world::{World, ignore};
+use crate::pipeline::point_scatter::point_lights_along as scattered_along;
 
 /// The point lights' light scattered towards the camera along `ray` (camera
 /// transmittance included), over its medium piece up to where the camera's
@@ -33,27 +30,11 @@ pub fn point_lights_along(scene: &Scene, ray: &CameraRay, dt: f64, s: &mut Sampl
     if scene.point_lights.is_empty() || end <= t0 || !end.is_finite() {
         return Rgb::ZERO;
     }
-    let lobe = Lobe::Phase {
-        phase: m.phase,
-        travel: ray.dir,
-    };
-    let h_min = 1e-9 * scene.scale();
     let n = ((end - t0) / dt)
         .ceil()
         .clamp(1.0, super::camera_march::MAX_MARCH_POINTS as f64) as u32;
-    let mut sum = Rgb::ZERO;
-    for light in &scene.point_lights {
-        let eq = Equiangular::towards::<D3>((ray.origin, ray.dir), light.position, h_min, (t0, end));
-        let u0 = s.next_f64();
-        for j in 0..n {
-            let t = eq.sample((j as f64 + u0) / n as f64).clamp(t0, end);
-            let x = ray.at(t);
-            let lit = point_lights(scene, std::slice::from_ref(light), x, &lobe, None, rays, &mut ignore);
-            let tr = m.transmittance(ray.origin, ray.dir, t);
-            sum += m.sigma_s * tr * lit / (eq.pdf(t) * n as f64);
-        }
-    }
-    sum
+    // The medium's pieces along the ray up to `end` are its piece (t0, end).
+    scattered_along(scene, m, (ray.origin, ray.dir, end), n, s, rays)
 }
 
 #[cfg(test)]
@@ -79,7 +60,8 @@ mod tests {
         for miss in [1e-3, 0.3] {
             let dir = DVec3::new(0.0, 0.0, -1.0);
             let origin = light.position + DVec3::new(miss, 0.0, 1.5);
-            let (t0, t1) = (0.5, 3.5);
+            // The medium's piece of the ray: from the origin (inside) to z = −2.
+            let (t0, t1) = (0.0, 3.2);
             let ray = CameraRay {
                 origin,
                 dir,
