@@ -116,21 +116,19 @@ impl Workbench {
             let l = ui.label("steps per ray");
             ui.add(DragValue::new(&mut p.steps).range(1..=1024)).labelled_by(l.id);
             ui.end_row();
-            let mut per_pixel = p.direct_samples.is_some();
-            ui.checkbox(&mut per_pixel, "straight light per pixel")
-                .on_hover_text("Sample the light arriving straight from the lights at every pixel and cache only the rest (--direct-samples)");
-            let mut n = p.direct_samples.unwrap_or(64);
-            ui.add_enabled(per_pixel, DragValue::new(&mut n).range(1..=4096))
-                .accessible_name("straight-light samples per pixel");
-            p.direct_samples = per_pixel.then_some(n);
+            per_pixel_count(
+                ui,
+                &mut p.direct_samples,
+                ("straight light per pixel", "straight-light samples per pixel"),
+                "Sample the light arriving straight from the lights at every pixel and cache only the rest (--direct-samples)",
+            );
             ui.end_row();
-            let mut per_pixel = p.point_scatter.is_some();
-            ui.checkbox(&mut per_pixel, "lamps' scattered light per pixel")
-                .on_hover_text("Sample the point lights' light scattered once in the fog at every pixel, with this many directions, and cache only the rest (--point-scatter): its peak around a lamp is not extrapolated");
-            let mut n = p.point_scatter.unwrap_or(64);
-            ui.add_enabled(per_pixel, DragValue::new(&mut n).range(1..=4096))
-                .accessible_name("point-light scattering directions per pixel");
-            p.point_scatter = per_pixel.then_some(n);
+            per_pixel_count(
+                ui,
+                &mut p.point_scatter,
+                ("lamps' scattered light per pixel", "point-light scattering directions per pixel"),
+                "Sample the point lights' light scattered once in the fog at every pixel, with this many directions, and cache only the rest (--point-scatter): its peak around a lamp is not extrapolated",
+            );
             ui.end_row();
             let mut limited = p.edge_reach.is_some();
             ui.checkbox(&mut limited, "reach ≤ edge distance ×")
@@ -308,4 +306,15 @@ impl Workbench {
                 ui.end_row();
             });
     }
+}
+
+/// A light part sampled per pixel instead of cached: a checkbox (`label`) and its
+/// count per pixel (`name`), 64 when first checked.
+fn per_pixel_count(ui: &mut egui::Ui, count: &mut Option<u32>, (label, name): (&str, &str), hover: &str) {
+    let mut per_pixel = count.is_some();
+    ui.checkbox(&mut per_pixel, label).on_hover_text(hover);
+    let mut n = count.unwrap_or(64);
+    ui.add_enabled(per_pixel, DragValue::new(&mut n).range(1..=4096))
+        .accessible_name(name);
+    *count = per_pixel.then_some(n);
 }

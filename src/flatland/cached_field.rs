@@ -219,13 +219,11 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                         (Part::All | Part::Direct, _) => scene.direct_part(x, &lobe, &mut s, &mut rays) * m.sigma_s,
                         _ => Rgb::ZERO,
                     };
-                    let once = match cs.point_scatter {
-                        Some(n) if fp.part == Part::All => {
-                            let item = (j * w + i) as u64;
-                            once_scattered_point_lights(scene, x, &lobe, n, (cs.seed, item), &mut rays) * m.sigma_s
-                        }
-                        _ => Rgb::ZERO,
-                    };
+                    // `render_cached` kept it only for a field of all light in one cache.
+                    let once = cs.point_scatter.map_or(Rgb::ZERO, |n| {
+                        let item = (j * w + i) as u64;
+                        once_scattered_point_lights(scene, x, &lobe, n, (cs.seed, item), &mut rays) * m.sigma_s
+                    });
                     let cached: Vec<Option<Rgb>> = p
                         .caches
                         .iter()
@@ -266,6 +264,6 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
         reconstruction_rays,
         uncovered_pixels,
         direct_samples: p.direct_samples,
-        point_scatter: cs.point_scatter.filter(|_| fp.part == Part::All),
+        point_scatter: cs.point_scatter,
     }
 }
