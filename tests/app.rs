@@ -422,18 +422,19 @@ fn params_follow_the_app_resolution_unless_set() {
     let tuned = CompareParams {
         direct_samples: Some(32),
         point_scatter: Some(48),
+        near_light_paths: Some(300),
         edge_reach: Some(0.5),
         ..p.clone()
     };
     let cs = tuned.cache_settings(CacheMethod::Ours, &fp);
     assert_eq!(
-        (cs.direct_samples, cs.point_scatter, cs.edge_reach),
-        (Some(32), Some(48), Some(0.5))
+        (cs.direct_samples, cs.point_scatter, cs.near_light_paths, cs.edge_reach),
+        (Some(32), Some(48), Some(300), Some(0.5))
     );
     assert_eq!(
         compare_command(None, &fp, &tuned, "o"),
         "volcache figure compare --caches 150 --rays 512 --steps 16 --direct-samples 32 --point-scatter 48 \
-         --edge-reach 0.5 --res 128x128 --ref-spp 256 --seed 7 --out o"
+         --near-light-paths 300 --edge-reach 0.5 --res 128x128 --ref-spp 256 --seed 7 --out o"
     );
     // The gradient-noise reach reaches ours' settings (Jarosz 2008 measures no
     // gradient noise) and the command.

@@ -8,7 +8,7 @@ use volcache::core::metric::CacheMethod;
 use volcache::flatland::cached_field::budget_settings;
 use volcache::flatland::field::{Field, FieldParams, field_errors, render_field};
 use volcache::flatland::scene::Scene;
-use volcache::pipeline::budget::schedule;
+use volcache::pipeline::budget::{flatland_near_light_paths, schedule};
 use volcache::progress::Progress;
 use volcache::study::field_runs::{cache_run, cache_settings};
 
@@ -55,6 +55,7 @@ fn run(scene: &Scene, fp: &FieldParams, reference: &Field, b: f64, cached: bool,
     let mut cs = cache_settings(CacheMethod::Ours, s.eps, &fp, s.rays, 16);
     cs.edge_reach = Some(s.edge_reach);
     cs.point_scatter = s.point_scatter;
+    cs.near_light_paths = s.near_light_paths;
     if !cached {
         (cs.direct_samples, cs.direct_share) = s.direct.unzip();
     }
@@ -309,14 +310,41 @@ fn caches_takes_a_budget() {
         )
     );
     assert_eq!(summary["run"]["point_scatter"], summary["point_scatter"]);
+    // Fog of 4.2 mean free paths across: no pixels are path traced near the lamp.
+    assert!(summary["run"]["near_light"].is_null(), "{summary}");
     let out = base("cached")
-        .args(["--budget", "0.25", "--point-scatter", "0"])
+        .args(["--budget", "0.25", "--point-scatter", "0", "--near-light-paths", "0"])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(d.path().join("cached/summary.json")).unwrap()).unwrap();
     assert!(summary["point_scatter"].is_null(), "{summary}");
+    assert!(summary["run"]["near_light"].is_null(), "{summary}");
+    // In fog of 15 mean free paths across, the pixels within one of the lamp are
+    // path traced, with the budget's paths or `--near-light-paths`' (0: none).
+    let thick = d.path().join("thick.json");
+    std::fs::write(&thick, TWO_BARS.replace(r#""sigma_s": 1.2"#, r#""sigma_s": 5.0"#)).unwrap();
+    let near_light = |extra: &[&str], out: &str| {
+        let out_dir = d.path().join(out);
+        let run = on(&thick, out).args(extra).output().unwrap();
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        let s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("summary.json")).unwrap()).unwrap();
+        s["run"]["near_light"].clone()
+    };
+    let budget = near_light(&["--budget", "0.25"], "thick_budget");
+    assert_eq!(budget["paths"], u64::from(flatland_near_light_paths(0.25)), "{budget}");
+    assert!(
+        (budget["radius"].as_f64().unwrap() - 1.0 / 5.3).abs() < 1e-12,
+        "{budget}"
+    );
+    assert!(budget["pixels"].as_u64().unwrap() > 0, "{budget}");
+    assert_eq!(
+        near_light(&["--eps", "0.05", "--near-light-paths", "100"], "thick_100")["paths"],
+        100
+    );
+    assert!(near_light(&["--budget", "0.25", "--near-light-paths", "0"], "thick_none").is_null());
     // An emitting segment: the budget's samples, unless --direct-samples says.
     for (extra, samples) in [(vec![], None), (vec!["--direct-samples", "3"], Some(3))] {
         let out = on(&lamp, "lamp")

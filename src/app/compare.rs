@@ -40,6 +40,9 @@ pub struct CompareParams {
     /// The point lights' once-scattered light sampled per pixel with this many
     /// directions, not cached (`--point-scatter`).
     pub point_scatter: Option<u32>,
+    /// The pixels within a mean free path of a point light path traced with this
+    /// many paths each, not read from records (`--near-light-paths`).
+    pub near_light_paths: Option<u32>,
     /// Records reach no farther than this multiple of their distance to the
     /// nearest edge they see (`--edge-reach`).
     pub edge_reach: Option<f64>,
@@ -58,6 +61,7 @@ impl Default for CompareParams {
             ref_spp: 256,
             direct_samples: None,
             point_scatter: None,
+            near_light_paths: None,
             edge_reach: None,
             gradient_noise_reach: false,
         }
@@ -80,11 +84,12 @@ impl CompareParams {
 
     /// The cache settings of `method` (as `volcache caches`' defaults with these
     /// rays, steps, seed, straight-light samples, once-scattered point-light
-    /// directions, edge reach and gradient-noise reach, the last for ours only).
+    /// directions, paths near point lights, edge reach and gradient-noise reach, the last for ours only).
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
         let mut cs = field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps);
         cs.direct_samples = self.direct_samples.map(|n| n.max(1));
         cs.point_scatter = self.point_scatter.map(|n| n.max(1));
+        cs.near_light_paths = self.near_light_paths.map(|n| n.max(1));
         cs.edge_reach = self.edge_reach.map(crate::limits::clamp_edge_reach);
         cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         cs
@@ -233,6 +238,9 @@ pub fn compare_command(scene: Option<&str>, fp: &FieldParams, p: &CompareParams,
         .map_or(String::new(), |n| format!(" --direct-samples {n}"));
     if let Some(n) = cs.point_scatter {
         direct += &format!(" --point-scatter {n}");
+    }
+    if let Some(n) = cs.near_light_paths {
+        direct += &format!(" --near-light-paths {n}");
     }
     let mut reach = cs.edge_reach.map_or(String::new(), |k| format!(" --edge-reach {k}"));
     if cs.gradient_noise_reach {

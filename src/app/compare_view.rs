@@ -120,6 +120,7 @@ impl Workbench {
                 ui,
                 &mut p.direct_samples,
                 ("straight light per pixel", "straight-light samples per pixel"),
+                (64, 4096),
                 "Sample the light arriving straight from the lights at every pixel and cache only the rest (--direct-samples)",
             );
             ui.end_row();
@@ -127,7 +128,16 @@ impl Workbench {
                 ui,
                 &mut p.point_scatter,
                 ("lamps' scattered light per pixel", "point-light scattering directions per pixel"),
+                (64, 4096),
                 "Sample the point lights' light scattered once in the fog at every pixel, with this many directions, and cache only the rest (--point-scatter): its peak around a lamp is not extrapolated",
+            );
+            ui.end_row();
+            per_pixel_count(
+                ui,
+                &mut p.near_light_paths,
+                ("path trace near lamps", "paths per pixel near a lamp"),
+                (1024, 16384),
+                "Path trace the pixels within a mean free path of a point light with this many paths each, instead of reading them from records (--near-light-paths): the light scattered twice and more still peaks there",
             );
             ui.end_row();
             let mut limited = p.edge_reach.is_some();
@@ -309,12 +319,18 @@ impl Workbench {
 }
 
 /// A light part sampled per pixel instead of cached: a checkbox (`label`) and its
-/// count per pixel (`name`), 64 when first checked.
-fn per_pixel_count(ui: &mut egui::Ui, count: &mut Option<u32>, (label, name): (&str, &str), hover: &str) {
+/// count per pixel (`name`): `default` when first checked, at most `most`.
+fn per_pixel_count(
+    ui: &mut egui::Ui,
+    count: &mut Option<u32>,
+    (label, name): (&str, &str),
+    (default, most): (u32, u32),
+    hover: &str,
+) {
     let mut per_pixel = count.is_some();
     ui.checkbox(&mut per_pixel, label).on_hover_text(hover);
-    let mut n = count.unwrap_or(64);
-    ui.add_enabled(per_pixel, DragValue::new(&mut n).range(1..=4096))
+    let mut n = count.unwrap_or(default);
+    ui.add_enabled(per_pixel, DragValue::new(&mut n).range(1..=most))
         .accessible_name(name);
     *count = per_pixel.then_some(n);
 }

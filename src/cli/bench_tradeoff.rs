@@ -131,6 +131,7 @@ pub fn run(a: TradeoffArgs) -> anyhow::Result<ExitCode> {
                         direct_samples: ours.run.direct_samples,
                         // The same split as ours: the two caches hold the same light.
                         point_scatter: Some(args.point_scatter_for(&scene).unwrap_or(0)),
+                        near_light_paths: Some(args.near_light_paths_for(&scene).unwrap_or(0)),
                         ..a.cache.clone()
                     })
                 }

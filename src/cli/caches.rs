@@ -73,6 +73,13 @@ pub struct CacheArgs {
     /// else cached.
     #[arg(long)]
     pub point_scatter: Option<u32>,
+    /// Path trace the pixels within one mean free path of a point light (at most
+    /// a tenth of the scene's size) whole, with this many paths each, instead of
+    /// reading them from records (none are placed there): around a point light
+    /// the light scattered twice or more still peaks, and records there are
+    /// noisy. 0 caches them. Default: the budget's under --budget, else cached.
+    #[arg(long)]
+    pub near_light_paths: Option<u32>,
     /// Limit every record's radii to this multiple of its distance to the nearest
     /// surface edge it sees (a segment's end, a triangle's silhouette edge), where
     /// the light turns with the angle and no Taylor expansion reaches across, or
@@ -161,6 +168,15 @@ impl CacheArgs {
         }
     }
 
+    /// `--near-light-paths` (0: none), or the budget's.
+    pub fn near_light_paths_for(&self, scene: &Scene) -> Option<u32> {
+        match (self.near_light_paths, self.budget) {
+            (Some(n), _) => (n > 0).then_some(n),
+            (None, Some(b)) => budget_settings(scene, b).near_light_paths,
+            (None, None) => None,
+        }
+    }
+
     /// The straight light's samples per pixel and their share of the placement's
     /// rays: `--direct-samples` (no share), or under `--budget` the budget's where
     /// the scene has lights with an extent (delta lights' straight light is per
@@ -198,6 +214,7 @@ pub fn cache_settings(scene: &Scene, method: CacheMethod, a: &CacheArgs, fp: &Fi
     cs.probe.phase_roulette = a.phase_roulette;
     cs.record_noise = a.record_noise.target();
     cs.point_scatter = a.point_scatter_for(scene);
+    cs.near_light_paths = a.near_light_paths_for(scene);
     cs
 }
 
@@ -286,6 +303,12 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
     check_spp("--ref-spp", a.ref_spp, limits::MAX_SPP)?;
     if let Some(n) = a.direct_samples {
         check_spp("--direct-samples", n, limits::MAX_SPP)?;
+    }
+    if let Some(n) = a.point_scatter.filter(|&n| n > 0) {
+        check_spp("--point-scatter", n, limits::MAX_SPP)?;
+    }
+    if let Some(n) = a.near_light_paths.filter(|&n| n > 0) {
+        check_spp("--near-light-paths", n, limits::MAX_SPP)?;
     }
     if let Some(k) = a.edge_reach {
         check_range("--edge-reach", k, limits::EDGE_REACH)?;

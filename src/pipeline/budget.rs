@@ -182,6 +182,27 @@ pub fn flatland_point_scatter(b: f64) -> u32 {
     (FLATLAND_POINT_SCATTER_AT_ONE * b).clamp(lo, hi).round() as u32
 }
 
+/// Paths per pixel of a 2D field's pixels near a point light
+/// (`CacheSettings::near_light_paths`) at budget one, and their growth: ∝ √b.
+/// Those pixels are few (3% of `shaded_lamp.json`'s) and a path there is cheap
+/// against a record, so they take many; √b rather than b because the records'
+/// error falls slower than 1/√time, and the near pixels' should keep pace with
+/// it, not outrun it. Measured on `shaded_lamp.json` at 128² (4,096-spp
+/// reference, noise ≈ 0.09, seed 1, one thread): budget ¼ without / 64 / 256
+/// paths RMSE 0.71 / 0.57 / 0.45 in 1.6 / 1.7 / 2.1 s; budget 1 without / 256 /
+/// 1,024: 0.44 / 0.30 / 0.25 in 4.0 / 4.4 / 5.8 s; budget 4 without / 1,024 /
+/// 4,096: 0.35 / 0.25 / 0.23 in 8.5 / 10.4 / 15.9 s.
+pub const FLATLAND_NEAR_LIGHT_PATHS_AT_ONE: f64 = 1024.0;
+/// Bounds of [`flatland_near_light_paths`].
+const FLATLAND_NEAR_LIGHT_PATHS_RANGE: (f64, f64) = (256.0, 16384.0);
+
+/// Paths per pixel near a point light in a 2D field at budget `b`.
+pub fn flatland_near_light_paths(b: f64) -> u32 {
+    let b = b.clamp(MIN_BUDGET, MAX_BUDGET);
+    let (lo, hi) = FLATLAND_NEAR_LIGHT_PATHS_RANGE;
+    (FLATLAND_NEAR_LIGHT_PATHS_AT_ONE * b.sqrt()).clamp(lo, hi).round() as u32
+}
+
 /// 3D images (`volcache render3d --budget`). First measured at 24×18 with the
 /// straight light cached (ε 1, ¼, 1/16 of the scene's default × 64 / 256 / 1024
 /// rays × 4 / 16 / 64 camera samples): p ≈ 0.5, K ∝ ε^−0.5, terms alike at a
@@ -330,6 +351,15 @@ mod tests {
             _ => 1.0,
         };
         s.eps_scale.powf(-m.count_exponent_q) * s.rays as f64 / m.rays_at_one * camera
+    }
+
+    #[test]
+    fn the_pixels_near_a_lamp_take_paths_as_the_root_of_the_budget() {
+        let paths: Vec<u32> = [0.25, 1.0, 4.0, 16.0].map(flatland_near_light_paths).to_vec();
+        assert_eq!(paths, [512, 1024, 2048, 4096]);
+        // Bounded both ways, also for budgets outside the schedule's range.
+        assert_eq!(flatland_near_light_paths(0.0), 256);
+        assert_eq!(flatland_near_light_paths(1e9), 16384);
     }
 
     #[test]

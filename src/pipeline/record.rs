@@ -111,6 +111,13 @@ pub struct CacheSettings {
     /// of all light (one cache); others ignore it. None: cached.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub point_scatter: Option<u32>,
+    /// Path trace every point served within one mean free path of a point light
+    /// (`super::point_scatter::near_light_radius`) whole, with this many paths,
+    /// instead of reading it from the records: there the light scattered twice
+    /// or more still peaks (log 1/r in 2D) and the records holding it are noisy.
+    /// 2D fields of all light (one cache); others ignore it. None: cached.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_light_paths: Option<u32>,
 }
 
 /// When a record has enough light fields ([`CacheSettings::record_noise`]).
@@ -148,6 +155,7 @@ impl CacheSettings {
             shrink_noisy_gradients: true,
             record_noise: None,
             point_scatter: None,
+            near_light_paths: None,
         }
     }
 

@@ -68,6 +68,10 @@ pub struct MethodRun {
     /// records left it out (`CacheSettings::point_scatter`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub point_scatter: Option<u32>,
+    /// The pixels near point lights path traced whole
+    /// (`CacheSettings::near_light_paths`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_light: Option<crate::flatland::cached_field::NearLight>,
     pub errors: Option<FieldErrors>,
 }
 
@@ -169,6 +173,7 @@ pub fn cache_run(
         seconds_total: seconds,
         direct_samples: f.direct_samples,
         point_scatter: f.point_scatter,
+        near_light: f.near_light,
         errors: Some(field_errors(&f.field, reference)),
         field: f.field,
     })
@@ -195,6 +200,7 @@ pub fn pt_run(
         seconds_total: r.seconds,
         direct_samples: None,
         point_scatter: None,
+        near_light: None,
         errors: Some(field_errors(&r.field, reference)),
         field: r.field,
     })
