@@ -323,3 +323,47 @@ fn path_tracing_the_pixels_near_a_lamp_lowers_the_error_of_ours() {
         assert!(w < c, "seed {seed}: path traced {w} against cached {c}");
     }
 }
+
+/// Pixels near a lamp may take up to a million paths each: a cancel after the
+/// placement stops them (without the check this takes hours; it stops in well
+/// under a second).
+#[test]
+fn a_cancel_stops_the_pixels_near_a_lamp() {
+    use std::sync::Arc;
+    use std::time::{Duration, Instant};
+    use volcache::flatland::cached_field::{RecordMemo, render_cached};
+    use volcache::pipeline::placement::CountError;
+    let scene = Scene::from_json(WALL_LAMP, "<wall lamp>").unwrap();
+    let fp = FieldParams::from_scene(&scene);
+    let mut cs = cache_settings(CacheMethod::Ours, 0.05, &fp, 32, 4);
+    cs.near_light_paths = Some(1 << 20);
+    let progress = Arc::new(Progress::new());
+    let job = {
+        let progress = Arc::clone(&progress);
+        std::thread::spawn(move || render_cached(&scene, &fp, &cs, None, &mut RecordMemo::new(), &progress).map(|_| ()))
+    };
+    let start = Instant::now();
+    while progress.fraction() < 1.0 && !job.is_finished() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "the placement did not finish"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    println!(
+        "placed in {:.2} s (progress {:.3})",
+        start.elapsed().as_secs_f64(),
+        progress.fraction()
+    );
+    progress.cancel();
+    let cancelled = Instant::now();
+    while !job.is_finished() {
+        assert!(
+            cancelled.elapsed() < Duration::from_secs(60),
+            "the pixels near the lamp ignored the cancel"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    println!("stopped {:.3} s after the cancel", cancelled.elapsed().as_secs_f64());
+    assert!(matches!(job.join().unwrap(), Err(CountError::Cancelled(_))));
+}

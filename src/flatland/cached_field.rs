@@ -26,7 +26,7 @@ use crate::core::rng::Sampler;
 use crate::core::space::D2;
 use crate::pipeline::budget::shared_direct_samples;
 use crate::pipeline::path::direct_mean;
-use crate::pipeline::path::{Query, estimate};
+use crate::pipeline::path::{Query, Settings, sample_query};
 use crate::pipeline::placement::{
     CountError, Placement, QueryPoint, QuerySource, interpolate, place, place_with_count,
 };
@@ -35,7 +35,7 @@ use crate::pipeline::probe::Outgoing;
 use crate::pipeline::record::Cached;
 use crate::pipeline::sight::{Near, near_table};
 use crate::pipeline::world::World;
-use crate::progress::Progress;
+use crate::progress::{Cancelled, Progress};
 use glam::DVec2;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -214,11 +214,19 @@ pub fn render_cached(
         let points = placement.query_points as usize;
         placement.direct_samples = Some(shared_direct_samples(min, share, placement.rays, points));
     }
-    Ok(reconstruct(scene, fp, cs, field, placement))
+    Ok(reconstruct(scene, fp, cs, field, placement, progress)?)
 }
 
-/// Every pixel from the caches (plus the direct part), clamped at zero.
-fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: Field, p: Placement<D2>) -> CachedField {
+/// Every pixel from the caches (plus the parts taken per pixel); an error when
+/// cancelled.
+fn reconstruct(
+    scene: &Scene,
+    fp: &FieldParams,
+    cs: &CacheSettings,
+    mut field: Field,
+    p: Placement<D2>,
+    progress: &Progress,
+) -> Result<CachedField, Cancelled> {
     let t1 = std::time::Instant::now();
     let (w, h) = (fp.width, fp.height);
     let omega_o = DVec2::from_angle(fp.omega_o_deg.to_radians());
@@ -236,16 +244,24 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
             let mut scratch = Vec::new();
             let row = (0..w)
                 .map(|i| {
+                    // Pixels near a lamp may take thousands of paths each.
+                    progress.check()?;
                     let x = field.pixel_center(i, j);
                     let Some(m) = scene.medium_at(x) else {
-                        return (Rgb::ZERO, false, true);
+                        return Ok((Rgb::ZERO, false, true));
                     };
                     let item = (j * w + i) as u64;
                     if let Some((n, _)) = near_light.filter(|&(_, r)| near_a_point_light(scene, x, r)) {
-                        let q = Query::InScattered { omega_o };
-                        let e = estimate(scene, x, &q, &cs.probe.settings, n, cs.seed ^ NEAR_LIGHT_STREAM, item);
-                        rays += e.rays;
-                        return (e.mean.total(), true, true);
+                        let v = path_traced(
+                            scene,
+                            (x, omega_o),
+                            &cs.probe.settings,
+                            n,
+                            (cs.seed, item),
+                            progress,
+                            &mut rays,
+                        )?;
+                        return Ok((v, true, true));
                     }
                     let lobe = Lobe::Phase {
                         phase: m.phase,
@@ -276,12 +292,12 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                         (Part::Single, _) => cached[0],
                         (Part::Multiple, _) => cached[1],
                     };
-                    (v, true, covered)
+                    Ok((v, true, covered))
                 })
-                .collect();
-            (row, rays)
+                .collect::<Result<_, Cancelled>>()?;
+            Ok((row, rays))
         })
-        .collect();
+        .collect::<Result<_, Cancelled>>()?;
     let near_light_pixels = near_light.map(|(_, r)| {
         (0..w * h)
             .filter(|k| {
@@ -299,7 +315,7 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
             uncovered_pixels += !covered as usize;
         }
     }
-    CachedField {
+    Ok(CachedField {
         field,
         records: p.records(),
         eps: p.eps,
@@ -318,7 +334,31 @@ fn reconstruct(scene: &Scene, fp: &FieldParams, cs: &CacheSettings, mut field: F
                 radius: near_light_radius(scene),
                 pixels,
             }),
+    })
+}
+
+/// L_s(x, ω_o) path traced with `n` samples, as the path tracer's pixels are
+/// (streams (seed ^ salt, item, k)); cancellation is checked every 1,024 paths,
+/// as a pixel near a lamp may take a million.
+fn path_traced(
+    scene: &Scene,
+    (x, omega_o): (DVec2, DVec2),
+    settings: &Settings,
+    n: u32,
+    (seed, item): (u64, u64),
+    progress: &Progress,
+    rays: &mut u64,
+) -> Result<Rgb, Cancelled> {
+    let q = Query::InScattered { omega_o };
+    let mut sum = Rgb::ZERO;
+    for k in 0..n {
+        if k % 1024 == 0 {
+            progress.check()?;
+        }
+        let mut s = settings.sample_stream(seed ^ NEAR_LIGHT_STREAM, item, k as u64);
+        sum += sample_query(scene, x, &q, settings, &mut s, rays).total();
     }
+    Ok(sum / n.max(1) as f64)
 }
 
 /// Salt of the near-light pixels' paths: apart from the pixel's other samples.
