@@ -298,13 +298,15 @@ fn reconstruct(
             Ok((row, rays))
         })
         .collect::<Result<_, Cancelled>>()?;
-    let near_light_pixels = near_light.map(|(_, r)| {
-        (0..w * h)
+    let near_light = near_light.map(|(paths, radius)| NearLight {
+        paths,
+        radius,
+        pixels: (0..w * h)
             .filter(|k| {
                 let x = field.pixel_center(k % w, k / w);
-                scene.medium_at(x).is_some() && near_a_point_light(scene, x, r)
+                scene.medium_at(x).is_some() && near_a_point_light(scene, x, radius)
             })
-            .count()
+            .count(),
     });
     let (mut reconstruction_rays, mut uncovered_pixels) = (0, 0);
     for (j, (row, rays)) in rows.into_iter().enumerate() {
@@ -326,14 +328,7 @@ fn reconstruct(
         uncovered_pixels,
         direct_samples: p.direct_samples,
         point_scatter: cs.point_scatter,
-        near_light: cs
-            .near_light_paths
-            .zip(near_light_pixels)
-            .map(|(paths, pixels)| NearLight {
-                paths,
-                radius: near_light_radius(scene),
-                pixels,
-            }),
+        near_light,
     })
 }
 
