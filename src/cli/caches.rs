@@ -73,11 +73,13 @@ pub struct CacheArgs {
     /// else cached.
     #[arg(long)]
     pub point_scatter: Option<u32>,
-    /// Path trace the pixels within one mean free path of a point light (at most
-    /// a tenth of the scene's size) whole, with this many paths each, instead of
-    /// reading them from records (none are placed there): around a point light
+    /// Path trace the pixels within one mean free path of a point light whole,
+    /// with this many paths each, instead of reading them from records (records
+    /// are still placed there, for the pixels just outside): around a point light
     /// the light scattered twice or more still peaks, and records there are
-    /// noisy. 0 caches them. Default: the budget's under --budget, else cached.
+    /// noisy. Only in fog at least ten mean free paths across the scene (in
+    /// thinner fog nothing is path traced: it does not pay there). 0 caches them.
+    /// Default: the budget's under --budget, else cached.
     #[arg(long)]
     pub near_light_paths: Option<u32>,
     /// Limit every record's radii to this multiple of its distance to the nearest

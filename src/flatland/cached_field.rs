@@ -56,7 +56,8 @@ pub struct BudgetSettings {
     pub edge_reach: f64,
     /// `CacheSettings::point_scatter`, where the scene has point lights in fog.
     pub point_scatter: Option<u32>,
-    /// `CacheSettings::near_light_paths`, where the scene has point lights in fog.
+    /// `CacheSettings::near_light_paths`, where the scene has point lights in fog
+    /// at least ten mean free paths across (`near_light_radius` > 0).
     pub near_light_paths: Option<u32>,
 }
 
