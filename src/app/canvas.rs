@@ -6,6 +6,7 @@
 use super::edit::{Handle, pick, selection_of};
 use super::overlay::{self, Overlay};
 use super::readout::MethodReadout;
+use super::result_id::ResultId;
 use super::scene_draw::draw_scene;
 use super::view::{Xform, zoom_about};
 use super::workbench::{DragKind, DragState, Workbench};
@@ -13,7 +14,6 @@ use crate::core::metric::MetricParams;
 use crate::figure::{ColorScale, FieldStyle, field_to_rgba, tonemap_grey, tonemap_scale, viridis};
 use crate::pipeline::world::World;
 use eframe::egui::{self, Align2, Color32, FontId, Mesh, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
-use std::sync::Arc;
 
 /// Pick radius of handles, screen points.
 const PICK_RADIUS: f32 = 8.0;
@@ -36,7 +36,7 @@ impl Workbench {
     /// Re-map the field into the texture when a new level landed or the display changed.
     fn update_texture(&mut self, ctx: &egui::Context) {
         let Some(level) = self.field.latest() else { return };
-        let key = (Arc::as_ptr(level) as usize, self.display);
+        let key = (ResultId::of(level), self.display);
         if self.texture.as_ref().is_some_and(|(_, k)| *k == key) {
             return;
         }
@@ -59,7 +59,7 @@ impl Workbench {
             self.gradient_tex = None;
             return;
         };
-        let key = (Arc::as_ptr(grid) as usize, self.gradient_aware, self.field_params.part);
+        let key = (ResultId::of(grid), self.gradient_aware, self.field_params.part);
         if self.gradient_tex.as_ref().is_some_and(|(_, k, _)| *k == key) {
             return;
         }

@@ -5,6 +5,7 @@
 
 use super::compare::CompareResult;
 use super::overlay::error_image;
+use super::result_id::ResultId;
 use crate::figure::{FieldStyle, field_to_rgba, shared_error_range};
 use crate::flatland::field::Field;
 use eframe::egui::{self, TextureOptions};
@@ -12,8 +13,8 @@ use std::sync::Arc;
 
 /// Textures of one comparison result.
 pub struct CompareTextures {
-    /// The result (by address) and exposure they were made for.
-    key: (usize, u64),
+    /// The result and exposure they were made for.
+    key: (ResultId<CompareResult>, u64),
     /// The reference's field, then each run's.
     pub fields: Vec<egui::TextureHandle>,
     /// Each run's error map.
@@ -28,8 +29,8 @@ fn texture(ctx: &egui::Context, name: &str, f: &Field, style: &FieldStyle) -> eg
     ctx.load_texture(name, image, TextureOptions::NEAREST)
 }
 
-fn key_of(res: &Arc<CompareResult>, exposure: f64) -> (usize, u64) {
-    (Arc::as_ptr(res) as usize, exposure.to_bits())
+fn key_of(res: &Arc<CompareResult>, exposure: f64) -> (ResultId<CompareResult>, u64) {
+    (ResultId::of(res), exposure.to_bits())
 }
 
 impl CompareTextures {

@@ -53,6 +53,7 @@ pub mod panels;
 pub mod probe3d;
 pub mod readout;
 pub mod render3d_job;
+pub mod result_id;
 pub mod scene_draw;
 pub mod scene_panel;
 pub mod toolbar;

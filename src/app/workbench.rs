@@ -14,6 +14,7 @@ use super::field_method::{CacheFieldParams, FieldMethod, spawn_cached_field};
 use super::jobs::{Notify, Slot, no_notify};
 use super::layout::{CONTROLS_WIDTH, INSPECTOR_WIDTH, panel_max_widths};
 use super::overlay::{Overlay, Overlays};
+use super::result_id::ResultId;
 use super::view::{ViewState, Xform};
 use crate::figure::{ColorScale, RecordColor};
 use crate::flatland::cached_field::CacheMethod;
@@ -85,6 +86,9 @@ pub(super) struct GradientKey {
     omega_o_deg: f64,
 }
 
+/// What the gradient overlay's texture was made from: the grid, aware or not, the part.
+pub(super) type GradientTexKey = (ResultId<GradientGrid>, bool, Part);
+
 pub struct Workbench {
     pub doc: Document,
     pub field_params: FieldParams,
@@ -127,12 +131,12 @@ pub struct Workbench {
     /// Textures of the compare view and the error overlay, for one result.
     pub(super) compare_tex: Option<super::compare_textures::CompareTextures>,
     pub(super) compare_out: String,
-    pub(super) texture: Option<(egui::TextureHandle, (usize, Display))>,
+    pub(super) texture: Option<(egui::TextureHandle, (ResultId<FieldLevel>, Display))>,
     pub(super) color_scale: Option<ColorScale>,
-    /// The automatic exposure of the field level (by address) it was computed for.
-    auto_stops: std::cell::Cell<Option<(usize, f64)>>,
+    /// The automatic exposure of the field level it was computed for.
+    auto_stops: std::cell::RefCell<Option<(ResultId<FieldLevel>, f64)>>,
     /// The gradient overlay's texture, its key (grid, aware?, part) and arrows.
-    pub(super) gradient_tex: Option<(egui::TextureHandle, (usize, bool, Part), super::overlay::GradientView)>,
+    pub(super) gradient_tex: Option<(egui::TextureHandle, GradientTexKey, super::overlay::GradientView)>,
     pub message: Option<Message>,
     pub(super) drag: Option<DragState>,
     pub(super) hovered: Option<Handle>,
@@ -192,7 +196,7 @@ impl Workbench {
             compare_out: "out/compare".into(),
             texture: None,
             color_scale: None,
-            auto_stops: std::cell::Cell::new(None),
+            auto_stops: std::cell::RefCell::new(None),
             gradient_tex: None,
             message: None,
             drag: None,
@@ -300,15 +304,14 @@ impl Workbench {
         let Some(level) = level else {
             return self.display.exposure;
         };
-        let key = Arc::as_ptr(level) as usize;
-        match self.auto_stops.get() {
-            Some((k, e)) if k == key => e,
-            _ => {
-                let e = crate::figure::auto_exposure(&level.rendered.field);
-                self.auto_stops.set(Some((key, e)));
-                e
-            }
+        if let Some((id, e)) = &*self.auto_stops.borrow()
+            && id.is(level)
+        {
+            return *e;
         }
+        let e = crate::figure::auto_exposure(&level.rendered.field);
+        *self.auto_stops.borrow_mut() = Some((ResultId::of(level), e));
+        e
     }
 
     /// The field job of the current parameters has delivered every level.
