@@ -26,7 +26,7 @@ use crate::core::rng::Sampler;
 use crate::core::space::D2;
 use crate::pipeline::budget::shared_direct_samples;
 use crate::pipeline::path::direct_mean;
-use crate::pipeline::path::{Query, Settings, sample_query};
+use crate::pipeline::path::{Query, Settings, estimate_cancellable};
 use crate::pipeline::placement::{
     CountError, Placement, QueryPoint, QuerySource, interpolate, place, place_with_count,
 };
@@ -334,8 +334,8 @@ fn reconstruct(
 }
 
 /// L_s(x, ω_o) path traced with `n` samples, as the path tracer's pixels are
-/// (streams (seed ^ salt, item, k)); cancellation is checked every 1,024 paths,
-/// as a pixel near a lamp may take a million.
+/// (streams (seed ^ salt, item, k)), cancellable: a pixel near a lamp may take a
+/// million paths.
 fn path_traced(
     scene: &Scene,
     (x, omega_o): (DVec2, DVec2),
@@ -346,15 +346,9 @@ fn path_traced(
     rays: &mut u64,
 ) -> Result<Rgb, Cancelled> {
     let q = Query::InScattered { omega_o };
-    let mut sum = Rgb::ZERO;
-    for k in 0..n {
-        if k % 1024 == 0 {
-            progress.check()?;
-        }
-        let mut s = settings.sample_stream(seed ^ NEAR_LIGHT_STREAM, item, k as u64);
-        sum += sample_query(scene, x, &q, settings, &mut s, rays).total();
-    }
-    Ok(sum / n.max(1) as f64)
+    let e = estimate_cancellable(scene, x, &q, settings, n, (seed ^ NEAR_LIGHT_STREAM, item), progress)?;
+    *rays += e.rays;
+    Ok(e.mean.total())
 }
 
 /// Salt of the near-light pixels' paths: apart from the pixel's other samples.

@@ -24,6 +24,7 @@ use crate::core::free_flight::Flight;
 use crate::core::mis::power_heuristic;
 use crate::core::rng::Sampler;
 use crate::core::space::Space;
+use crate::progress::{Cancelled, Progress};
 use serde::{Deserialize, Serialize};
 
 /// Path-tracing settings.
@@ -788,19 +789,40 @@ pub fn estimate<W: World>(
     seed: u64,
     item: u64,
 ) -> Estimate {
+    let never = Progress::new();
+    match estimate_cancellable(world, x, q, settings, spp, (seed, item), &never) {
+        Ok(e) => e,
+        Err(Cancelled) => unreachable!("nobody holds the progress to cancel it"),
+    }
+}
+
+/// [`estimate`], checking `progress` for cancellation every 1,024 samples: one
+/// point may take a million paths (a pixel beside a lamp).
+pub fn estimate_cancellable<W: World>(
+    world: &W,
+    x: VecOf<W>,
+    q: &Query<W::S>,
+    settings: &Settings,
+    spp: u32,
+    (seed, item): (u64, u64),
+    progress: &Progress,
+) -> Result<Estimate, Cancelled> {
     let mut acc = Accumulator::default();
     if !q.defined_at(world, x) {
-        return acc.estimate();
+        return Ok(acc.estimate());
     }
     let mut rays = 0;
     for k in 0..spp {
+        if k % 1024 == 0 {
+            progress.check()?;
+        }
         let mut s = settings.sample_stream(seed, item, k as u64);
         acc.push(&sample_query(world, x, q, settings, &mut s, &mut rays));
     }
     acc.add_rays(rays);
     let mut e = acc.estimate();
     e.samples = spp as u64;
-    e
+    Ok(e)
 }
 
 /// Mean and standard error per channel of `n` samples of `f(sampler)`, each with
