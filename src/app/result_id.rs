@@ -21,12 +21,6 @@ impl<T> ResultId<T> {
     }
 }
 
-impl<T> Clone for ResultId<T> {
-    fn clone(&self) -> Self {
-        ResultId(self.0.clone())
-    }
-}
-
 impl<T> PartialEq for ResultId<T> {
     fn eq(&self, other: &Self) -> bool {
         Weak::ptr_eq(&self.0, &other.0)

@@ -193,11 +193,14 @@ pub fn render_cached(
     let all_in_one = fp.part == Part::All && !cs.per_part;
     let cs = &CacheSettings {
         point_scatter: cs.point_scatter.filter(|_| all_in_one),
-        near_light_paths: cs
-            .near_light_paths
-            .filter(|&n| all_in_one && n > 0 && near_light_radius(scene) > 0.0),
         ..cs.clone()
     };
+    // (paths, radius) of the pixels path traced whole near point lights.
+    let near_light = cs
+        .near_light_paths
+        .filter(|&n| all_in_one && n > 0)
+        .map(|n| (n, near_light_radius(scene)))
+        .filter(|&(_, r)| r > 0.0);
     let source = FieldPixels {
         scene,
         field: &field,
@@ -215,15 +218,16 @@ pub fn render_cached(
         let points = placement.query_points as usize;
         placement.direct_samples = Some(shared_direct_samples(min, share, placement.rays, points));
     }
-    Ok(reconstruct(scene, fp, cs, field, placement, progress)?)
+    Ok(reconstruct(scene, fp, (cs, near_light), field, placement, progress)?)
 }
 
-/// Every pixel from the caches (plus the parts taken per pixel); an error when
-/// cancelled.
+/// Every pixel from the caches (plus the parts taken per pixel, and the pixels
+/// near point lights path traced whole with `near_light`'s (paths, radius)); an
+/// error when cancelled.
 fn reconstruct(
     scene: &Scene,
     fp: &FieldParams,
-    cs: &CacheSettings,
+    (cs, near_light): (&CacheSettings, Option<(u32, f64)>),
     mut field: Field,
     p: Placement<D2>,
     progress: &Progress,
@@ -233,15 +237,14 @@ fn reconstruct(
     let omega_o = DVec2::from_angle(fp.omega_o_deg.to_radians());
     let second_order = cs.second_order && cs.method == CacheMethod::Ours;
     let per_part = p.caches.len() == 2;
-    // `render_cached` kept it only for a field of all light in one cache.
-    let near_light = cs.near_light_paths.map(|n| (n, near_light_radius(scene)));
-    // Per pixel (value, inside the medium, covered by a record), and rays per row.
-    type Row = (Vec<(Rgb, bool, bool)>, u64);
+    // Per pixel (value, inside the medium, covered by a record); per row its rays
+    // and its pixels path traced near a point light.
+    type Row = (Vec<(Rgb, bool, bool)>, u64, usize);
     let near: Vec<Vec<Near>> = p.caches.iter().map(|c| near_table(scene, c)).collect();
     let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|j| {
-            let mut rays = 0;
+            let (mut rays, mut near_pixels) = (0, 0);
             let mut scratch = Vec::new();
             let row = (0..w)
                 .map(|i| {
@@ -262,6 +265,7 @@ fn reconstruct(
                             progress,
                             &mut rays,
                         )?;
+                        near_pixels += 1;
                         return Ok((v, true, true));
                     }
                     let lobe = Lobe::Phase {
@@ -296,22 +300,13 @@ fn reconstruct(
                     Ok((v, true, covered))
                 })
                 .collect::<Result<_, Cancelled>>()?;
-            Ok((row, rays))
+            Ok((row, rays, near_pixels))
         })
         .collect::<Result<_, Cancelled>>()?;
-    let near_light = near_light.map(|(paths, radius)| NearLight {
-        paths,
-        radius,
-        pixels: (0..w * h)
-            .filter(|k| {
-                let x = field.pixel_center(k % w, k / w);
-                scene.medium_at(x).is_some() && near_a_point_light(scene, x, radius)
-            })
-            .count(),
-    });
-    let (mut reconstruction_rays, mut uncovered_pixels) = (0, 0);
-    for (j, (row, rays)) in rows.into_iter().enumerate() {
+    let (mut reconstruction_rays, mut uncovered_pixels, mut near_pixels) = (0, 0, 0);
+    for (j, (row, rays, row_near_pixels)) in rows.into_iter().enumerate() {
         reconstruction_rays += rays;
+        near_pixels += row_near_pixels;
         for (i, (v, valid, covered)) in row.into_iter().enumerate() {
             field.values[j * w + i] = v;
             field.valid[j * w + i] = valid;
@@ -329,7 +324,11 @@ fn reconstruct(
         uncovered_pixels,
         direct_samples: p.direct_samples,
         point_scatter: cs.point_scatter,
-        near_light,
+        near_light: near_light.map(|(paths, radius)| NearLight {
+            paths,
+            radius,
+            pixels: near_pixels,
+        }),
     })
 }
 
