@@ -4,6 +4,8 @@
 //! emitting segment, whose straight light the budget samples per pixel), none of
 //! the shipped scenes.
 
+mod common;
+
 use volcache::core::metric::CacheMethod;
 use volcache::flatland::cached_field::budget_settings;
 use volcache::flatland::field::{Field, FieldParams, field_errors, render_field};
@@ -74,20 +76,8 @@ fn run(scene: &Scene, fp: &FieldParams, reference: &Field, b: f64, cached: bool,
 /// squared noise.
 fn with_reference(json: &str) -> (Scene, FieldParams, Field, f64) {
     let scene = Scene::from_json(json, "<test scene>").unwrap_or_else(|e| panic!("{e}"));
-    let fp = FieldParams::from_scene(&scene);
-    let reference = render_field(
-        &scene,
-        &FieldParams {
-            spp: 32768,
-            seed: 99,
-            ..fp.clone()
-        },
-        &Progress::new(),
-    )
-    .unwrap();
-    let noise = reference.rms_std_error().powi(2);
-    println!("reference rms std error {:.3e}", noise.sqrt());
-    (scene, fp, reference.field, noise)
+    let (fp, reference, noise) = common::reference_2d(&scene, 32768);
+    (scene, fp, reference, noise)
 }
 
 /// The mean of the squared errors `rmse`, the reference's noise subtracted.

@@ -6,12 +6,14 @@
 //! pixels near a lamp path traced whole (`CacheSettings::near_light_paths`): the
 //! radius rule, and fields with it against without it.
 
+mod common;
+
 use glam::DVec2;
 use volcache::core::color::Rgb;
 use volcache::core::metric::CacheMethod;
 use volcache::flatland::cached_field::CacheSettings;
 use volcache::flatland::cached_field::budget_settings;
-use volcache::flatland::field::{Field, FieldParams, render_field};
+use volcache::flatland::field::{Field, FieldParams};
 use volcache::flatland::lights::Lobe;
 use volcache::flatland::scene::Scene;
 use volcache::pipeline::point_scatter::{near_a_point_light, near_light_radius, once_scattered_point_lights};
@@ -201,23 +203,11 @@ fn ours(
 /// over that of `without` (the reference's noise subtracted), and every seed's
 /// RMSE pair.
 fn with_and_without(scene: &Scene, ref_spp: u32, without: &dyn Fn(&mut CacheSettings)) -> (f64, Vec<(f64, f64)>) {
-    let fp = FieldParams::from_scene(scene);
-    let reference = render_field(
-        scene,
-        &FieldParams {
-            spp: ref_spp,
-            seed: 99,
-            ..fp.clone()
-        },
-        &Progress::new(),
-    )
-    .unwrap();
-    let noise = reference.rms_std_error().powi(2);
-    println!("reference rms std error {:.3e}", noise.sqrt());
+    let (fp, reference, noise) = common::reference_2d(scene, ref_spp);
     let (mut with, mut other) = (Vec::new(), Vec::new());
     for seed in 1..=4 {
-        with.push(ours(scene, &fp, &reference.field, seed, &|_| {}));
-        other.push(ours(scene, &fp, &reference.field, seed, without));
+        with.push(ours(scene, &fp, &reference, seed, &|_| {}));
+        other.push(ours(scene, &fp, &reference, seed, without));
         println!(
             "seed {seed}: with {:?}, without {:?}",
             with.last().unwrap(),

@@ -389,6 +389,28 @@ impl Fixture for D3 {
     }
 }
 
+/// A 2D scene's field parameters (its own), its `spp` reference field (seed 99,
+/// apart from the methods' seeds) and that reference's squared rms noise.
+pub fn reference_2d(
+    scene: &volcache::flatland::scene::Scene,
+    spp: u32,
+) -> (flatland::field::FieldParams, flatland::field::Field, f64) {
+    let fp = flatland::field::FieldParams::from_scene(scene);
+    let reference = flatland::field::render_field(
+        scene,
+        &flatland::field::FieldParams {
+            spp,
+            seed: 99,
+            ..fp.clone()
+        },
+        &Progress::new(),
+    )
+    .unwrap();
+    let noise = reference.rms_std_error().powi(2);
+    println!("reference rms std error {:.3e}", noise.sqrt());
+    (fp, reference.field, noise)
+}
+
 /// A point light beside a tilted plate in thick, forward-scattering fog (σ_t = 3,
 /// g = 0.8) over a floor: a 2D scene where one light field's records are noisy
 /// (`gradient_noise.rs`, `record_noise.rs`).
