@@ -121,6 +121,9 @@ fn a_cached_render_spends_its_time_budget_on_camera_samples() {
     assert!(spp > 2, "only the placed camera samples: {spp}");
     assert!(secs < 6.0 * 1.5, "{spp} spp in {secs} s");
     assert!(cache["surfaces"]["records"].as_u64().unwrap() > 0);
+    // The records' own noise, which the image's standard error does not show.
+    let noise = cache["records_relative_noise"].as_f64().unwrap();
+    assert!(noise > 0.0 && noise.is_finite(), "{noise}");
     let placed = cache["placement_seconds"].as_f64().unwrap() + cache["surfaces"]["seconds"].as_f64().unwrap();
     assert!(placed < secs, "records {placed} s of {secs} s");
 }

@@ -45,6 +45,12 @@ pub struct CacheSummary {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub image_split_candidates: Vec<volcache::volume::image_split::ImageSplit>,
     pub surface_paths: u32,
+    /// The records' own noise relative to their values, when they were placed
+    /// here (`pipeline::placement::ValueNoise`): an error shared by every march
+    /// point a record serves, which `relative_std_error` (the camera samples')
+    /// does not show.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub records_relative_noise: Option<f64>,
     pub placement_seconds: f64,
     pub placement_rays: u64,
     pub records_per_second: f64,

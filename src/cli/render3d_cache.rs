@@ -409,6 +409,8 @@ pub fn run_cached(
                 rays: loaded.file.placement_rays,
                 seconds: loaded.file.placement_seconds,
                 direct_samples: file_direct_samples(loaded.file.direct_samples, a.direct_samples, path)?,
+                // The file does not say how noisy its records are.
+                value_noise: Default::default(),
             }
         }
         None => {
@@ -442,6 +444,7 @@ pub fn run_cached(
         image_split: None,
         image_split_candidates: Vec::new(),
         surface_paths: cp.surface_paths,
+        records_relative_noise: placement.value_noise.relative(),
         placement_seconds: placement.seconds,
         placement_rays: placement.rays,
         records_per_second: placement.record_count() as f64 / placement.seconds.max(1e-9),

@@ -114,6 +114,9 @@ pub struct CachedField {
     /// Directions per pixel of the point lights' once-scattered light, where the
     /// records left it out.
     pub point_scatter: Option<u32>,
+    /// The records' own noise relative to their values
+    /// (`pipeline::placement::ValueNoise::relative`).
+    pub records_relative_noise: Option<f64>,
 }
 
 /// The pixels path traced whole around point lights
@@ -324,6 +327,7 @@ fn reconstruct(
         uncovered_pixels,
         direct_samples: p.direct_samples,
         point_scatter: cs.point_scatter,
+        records_relative_noise: p.value_noise.relative(),
         near_light: near_light.map(|(paths, radius)| NearLight {
             paths,
             radius,

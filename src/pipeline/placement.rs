@@ -82,6 +82,39 @@ pub struct Placement<S: Dim> {
     /// is sampled this many times at every point served
     /// ([`CacheSettings::direct_samples`]).
     pub direct_samples: Option<u32>,
+    /// How noisy the records placed here are (not those read from a file).
+    pub value_noise: ValueNoise,
+}
+
+/// The records' own noise, summed over the records a placement made: the
+/// variance each estimated for its value (`RecordData::value_var`) and its
+/// value's square (luminances of the scattered light).
+///
+/// Why: an image's reported standard error covers its camera samples, and a
+/// record's error is shared by every point it serves, so it is not in it. Where
+/// records are noisy (thick fog, a lamp in it: README, "Where the 3D cache
+/// fails") their relative noise tells how far the image may be off.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ValueNoise {
+    pub variance_sum: f64,
+    pub square_sum: f64,
+}
+
+impl ValueNoise {
+    /// √(Σ variance / Σ value²): the records' noise relative to their values
+    /// (RMS over RMS, so that dark records weigh little); None without records
+    /// or light.
+    pub fn relative(&self) -> Option<f64> {
+        let r = (self.variance_sum / self.square_sum).sqrt();
+        (self.square_sum > 0.0 && r.is_finite()).then_some(r)
+    }
+
+    fn add(&mut self, variance: f64, value: f64) {
+        if variance.is_finite() && value.is_finite() {
+            self.variance_sum += variance.max(0.0);
+            self.square_sum += value * value;
+        }
+    }
 }
 
 impl<S: Dim> Placement<S> {
@@ -127,11 +160,12 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
     let metric = cs.metric(world.scale());
     let units = source.units();
     progress.start(units as u64);
-    let (caches, mut moments) = match earlier {
-        Some(p) if p.cached == cached => (p.caches, p.moments),
+    let (caches, mut moments, mut value_noise) = match earlier {
+        Some(p) if p.cached == cached => (p.caches, p.moments, p.value_noise),
         _ => (
             cached.iter().map(|_| Cache::new()).collect(),
             vec![Vec::new(); cached.len()],
+            ValueNoise::default(),
         ),
     };
     // Records without moments (read from a file) keep an empty entry, so that entry
@@ -166,6 +200,7 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             })?;
             *rays += d.rays;
             records_seconds += d.seconds;
+            value_noise.add(d.value_var, d.payload(Cached::Scattered).luminance().value);
             for c in missing {
                 let value = d.payload(cached[c]);
                 let luminance = value.luminance();
@@ -211,6 +246,7 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
         rays,
         seconds: start.elapsed().as_secs_f64() - capture_wall + records_seconds,
         direct_samples: cs.direct_samples,
+        value_noise,
     })
 }
 

@@ -216,6 +216,10 @@ pub struct RecordData<S: Dim> {
     /// Noise variance of the multiple part's luminance gradient from its medium
     /// samples (ours, [`super::derivatives::aware_with_noise`]; 0 for Jarosz 2008).
     pub multiple_grad_var: f64,
+    /// Noise variance of the scattered light's value (luminance of single +
+    /// multiple, the plain estimate's: [`super::derivatives::scattered_value_variance`]),
+    /// of the mean of its light fields under [`CacheSettings::record_noise`].
+    pub value_var: f64,
 }
 
 impl<S: Dim> RecordData<S> {
@@ -324,11 +328,13 @@ pub fn compute_record<W: World>(
     };
     let (mut capture_seconds, mut rays) = (lf.seconds, lf.cost_rays + edge_rays);
     let mut derived = derive(&mut lf, cs);
+    // Summed over the light fields taken; that of their mean is var_sum / n².
+    let mut var_sum = scattered_value_variance(&lf);
+    let mut light_fields = 1.0;
     if let Some(target) = cs.record_noise {
         // Independent light fields (streams 1, 2, …) until the mean's standard
         // error, √(Σ var)/n, is within the target.
         let mut fields = vec![derived];
-        let mut var_sum = scattered_value_variance(&lf);
         while fields.len() < target.max_light_fields as usize {
             let n = fields.len() as f64;
             let value: f64 = fields.iter().map(Derived::scattered_luminance).sum::<f64>() / n;
@@ -340,6 +346,7 @@ pub fn compute_record<W: World>(
             (capture_seconds, rays) = (capture_seconds + more.seconds, rays + more.cost_rays);
             fields.push(derive(&mut more, cs));
         }
+        light_fields = fields.len() as f64;
         derived = Derived::mean(&fields);
     }
     let Derived {
@@ -367,6 +374,7 @@ pub fn compute_record<W: World>(
         capture_seconds,
         nearest_edge,
         multiple_grad_var,
+        value_var: var_sum / (light_fields * light_fields),
     })
 }
 

@@ -72,6 +72,11 @@ pub struct MethodRun {
     /// (`CacheSettings::near_light_paths`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub near_light: Option<crate::flatland::cached_field::NearLight>,
+    /// The records' own noise relative to their values (cache methods): an error
+    /// the image's noise does not show, shared by every pixel a record serves
+    /// (`pipeline::placement::ValueNoise`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub records_relative_noise: Option<f64>,
     pub errors: Option<FieldErrors>,
 }
 
@@ -174,6 +179,7 @@ pub fn cache_run(
         direct_samples: f.direct_samples,
         point_scatter: f.point_scatter,
         near_light: f.near_light,
+        records_relative_noise: f.records_relative_noise,
         errors: Some(field_errors(&f.field, reference)),
         field: f.field,
     })
@@ -201,6 +207,7 @@ pub fn pt_run(
         direct_samples: None,
         point_scatter: None,
         near_light: None,
+        records_relative_noise: None,
         errors: Some(field_errors(&r.field, reference)),
         field: r.field,
     })

@@ -65,6 +65,10 @@ pub struct Run3d {
     /// out (cache methods with `CacheSettings::direct_samples`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub direct_samples: Option<u32>,
+    /// The records' own noise relative to their values (cache methods;
+    /// `pipeline::placement::ValueNoise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub records_relative_noise: Option<f64>,
     pub seconds: f64,
     pub placement_seconds: f64,
     pub reconstruction_seconds: f64,
@@ -93,6 +97,7 @@ impl Run3d {
             budget: None,
             rays_per_record: None,
             direct_samples: None,
+            records_relative_noise: None,
             seconds: image.seconds,
             placement_seconds: 0.0,
             reconstruction_seconds: image.seconds,
@@ -136,6 +141,7 @@ pub fn cache_run(
     run.eps = Some(placement.eps);
     run.rays_per_record = Some(cs.probe.rays);
     run.direct_samples = cs.direct_samples;
+    run.records_relative_noise = placement.value_noise.relative();
     run.placement_seconds = placement.seconds;
     run.rays += placement.rays;
     if let Some(s) = &surfaces {
