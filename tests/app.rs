@@ -267,8 +267,10 @@ fn a_compare_run_finishes_with_finite_numbers_for_both_methods() {
         assert!(!r.records.is_empty() && r.rays > 0);
     }
     h.run_steps(2);
-    // The numbers are on screen, one caption per method.
+    // The numbers are on screen, one caption per method, with the records' own
+    // noise (which the error against the reference contains but does not name).
     assert_eq!(h.query_all_by_label_contains("RMSE").count(), 2);
+    assert_eq!(h.query_all_by_label_contains("records' noise").count(), 2);
     h.get_by_label_contains("compare done");
     let command = h.state_mut().compare_command().unwrap();
     assert_eq!(

@@ -127,6 +127,9 @@ pub struct MethodRun {
     /// Seconds of the timed run (placement + reconstruction).
     pub seconds: f64,
     pub errors: FieldErrors,
+    /// The records' own noise relative to their values
+    /// (`pipeline::placement::ValueNoise::relative`).
+    pub records_noise: Option<f64>,
 }
 
 impl MethodRun {
@@ -211,6 +214,7 @@ pub fn spawn_compare(scene: Arc<Scene>, key: &CompareKey, notify: Notify) -> Job
                         eps,
                         records: f.records.concat(),
                         errors: field_errors(&f.field, &res.reference),
+                        records_noise: f.records_relative_noise,
                         field: f.field,
                         rays,
                         seconds,

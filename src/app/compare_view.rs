@@ -32,8 +32,12 @@ fn color_name(c: RecordColor) -> &'static str {
 
 /// The numbers of a run as shown under its images.
 pub fn run_caption(r: &super::compare::MethodRun) -> String {
+    // The records' own noise: an error shared by the pixels each serves.
+    let noise = r
+        .records_noise
+        .map_or_else(String::new, |n| format!("\nrecords' noise {:.1}%", 100.0 * n));
     format!(
-        "{} records, ε = {:.3e}\n{:.2e} rays, {:.2} s\nRMSE {:.3e}\nrelMSE {:.3e}",
+        "{} records, ε = {:.3e}\n{:.2e} rays, {:.2} s\nRMSE {:.3e}\nrelMSE {:.3e}{noise}",
         r.records.len(),
         r.eps,
         r.rays as f64,
