@@ -200,7 +200,7 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             })?;
             *rays += d.rays;
             records_seconds += d.seconds;
-            value_noise.add(d.value_var, d.payload(Cached::Scattered).luminance().value);
+            value_noise.add(d.value_var, d.scattered_luminance());
             for c in missing {
                 let value = d.payload(cached[c]);
                 let luminance = value.luminance();

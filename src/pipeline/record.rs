@@ -222,7 +222,19 @@ pub struct RecordData<S: Dim> {
     pub value_var: f64,
 }
 
+/// The luminance of the scattered light's value (single + multiple): what a
+/// record of all scattered light caches, and what its `value_var` is of.
+fn scattered_luminance<S: Dim>(parts: &PartDerivs<S>) -> f64 {
+    (parts.single + parts.multiple).luminance().value
+}
+
 impl<S: Dim> RecordData<S> {
+    /// The luminance of the scattered light's value, whose noise variance is
+    /// [`RecordData::value_var`].
+    pub fn scattered_luminance(&self) -> f64 {
+        scattered_luminance(&self.parts)
+    }
+
     /// [`RecordData::payload`] with the multiple part's gradient G shrunk by its
     /// noise variance v ([`RecordData::multiple_grad_var`]): × max(0, 1 − v/|G|²),
     /// the positive-part James–Stein factor, which estimates |E G|²/|G|² (what
@@ -390,7 +402,7 @@ struct Derived<S: Dim> {
 impl<S: Dim> Derived<S> {
     /// The luminance of the scattered light's value (single + multiple).
     fn scattered_luminance(&self) -> f64 {
-        (self.parts.single + self.parts.multiple).luminance().value
+        scattered_luminance(&self.parts)
     }
 
     /// The mean of independent light fields' (the gradient's noise variance that of
