@@ -59,6 +59,39 @@ fn render3d_writes_exr_png_and_json() {
     assert!(json["rays3d_closest_hit_per_second"].as_f64().unwrap() > 0.0);
 }
 
+/// `--no-aimed-legs` leaves out the legs aimed near point lamps (to measure what
+/// they gain): the summary says so, and the paths cast fewer rays.
+#[test]
+fn aimed_legs_can_be_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], sub: &str| {
+        let out_dir = dir.path().join(sub);
+        let out = volcache()
+            .args([
+                "render3d",
+                "scenes3d/deep_lamp.json",
+                "--method",
+                "pt",
+                "--res",
+                "16x12",
+            ])
+            .args(["--spp", "4", "--seed", "2", "--quiet"])
+            .args(extra)
+            .arg("--out")
+            .arg(&out_dir)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(out_dir.join("deep_lamp_pt.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    let (aimed, plain) = (run(&[], "aimed"), run(&["--no-aimed-legs"], "plain"));
+    assert_eq!(aimed["params"]["settings"]["aimed_legs"], true);
+    assert_eq!(plain["params"]["settings"]["aimed_legs"], false);
+    let rays = |v: &serde_json::Value| v["rays"].as_u64().unwrap();
+    assert!(rays(&aimed) > rays(&plain), "{} vs {} rays", rays(&aimed), rays(&plain));
+}
+
 #[test]
 fn time_budget_limits_the_samples() {
     let dir = tempfile::tempdir().unwrap();

@@ -82,6 +82,10 @@ pub struct Render3dArgs {
     /// and lobe samples, as pbrt-v4's samplers do (`path::Sampling`).
     #[arg(long, value_enum, default_value = "independent")]
     pub sampling: Sampling,
+    /// Leave out the legs that paths and records' paths aim near point lamps
+    /// (`pipeline::lamp_aim`): only to measure what they gain.
+    #[arg(long)]
+    pub no_aimed_legs: bool,
     /// Stop adding camera samples before a pass that would exceed this many seconds
     /// in all. Cache methods: the records' placement counts, and --spp is the camera
     /// samples placement visits (default 4); the time left adds camera samples
@@ -169,6 +173,7 @@ pub fn run(a: Render3dArgs) -> anyhow::Result<ExitCode> {
     let mut params = RenderParams::from_scene(&scene);
     let mut cache = a.cache.clone();
     params.settings.sampling = a.sampling;
+    params.settings.aimed_legs = !a.no_aimed_legs;
     if let Some([w, h]) = a.res {
         (params.width, params.height) = (w as usize, h as usize);
     }

@@ -65,6 +65,12 @@ pub trait Dim: Space<Vec: Serialize + Default> {
     fn sample_cosine(normal: Self::Vec, s: &mut Sampler) -> (Self::Vec, f64);
     /// A direction uniform over the circle or sphere.
     fn sample_uniform(s: &mut Sampler) -> Self::Vec;
+    /// A direction within `theta_max` (≤ π/2) of the unit `axis`, its angle θ to
+    /// the axis uniform in [0, θ_max] (its side, or its azimuth, uniform too): a
+    /// density ∝ 1/θ per solid angle in 3D (`super::lamp_aim`).
+    fn sample_cone(axis: Self::Vec, theta_max: f64, s: &mut Sampler) -> Self::Vec;
+    /// The density of [`Dim::sample_cone`] at unit `w` (zero outside the cone).
+    fn cone_pdf(axis: Self::Vec, theta_max: f64, w: Self::Vec) -> f64;
 
     /// Componentwise minimum, maximum, product and reciprocal (for bounding boxes).
     fn min(a: Self::Vec, b: Self::Vec) -> Self::Vec;
@@ -221,6 +227,17 @@ impl Dim for D2 {
     fn sample_uniform(s: &mut Sampler) -> DVec2 {
         DVec2::from_angle(TAU * s.next_f64())
     }
+    fn sample_cone(axis: DVec2, theta_max: f64, s: &mut Sampler) -> DVec2 {
+        DVec2::from_angle(theta_max * (2.0 * s.next_f64() - 1.0)).rotate(axis)
+    }
+    fn cone_pdf(axis: DVec2, theta_max: f64, w: DVec2) -> f64 {
+        let theta = axis.perp_dot(w).atan2(axis.dot(w)).abs();
+        if theta <= theta_max && theta_max > 0.0 {
+            0.5 / theta_max
+        } else {
+            0.0
+        }
+    }
     box_ops!(DVec2);
     fn half_boundary(e: DVec2) -> f64 {
         e.x + e.y
@@ -343,6 +360,25 @@ impl Dim for D3 {
         let z = 1.0 - 2.0 * u1;
         let r = (1.0 - z * z).max(0.0).sqrt();
         DVec3::new(r * (TAU * u2).cos(), r * (TAU * u2).sin(), z)
+    }
+    fn sample_cone(axis: DVec3, theta_max: f64, s: &mut Sampler) -> DVec3 {
+        let (u1, u2) = (s.next_f64(), s.next_f64());
+        let (sin_t, cos_t) = (theta_max * u1).sin_cos();
+        let (sin_p, cos_p) = (TAU * u2).sin_cos();
+        let (t, b) = axis.any_orthonormal_pair();
+        (axis * cos_t + t * (sin_t * cos_p) + b * (sin_t * sin_p)).normalize()
+    }
+    fn cone_pdf(axis: DVec3, theta_max: f64, w: DVec3) -> f64 {
+        // θ from its sine and cosine: accurate next to the axis, where the
+        // density peaks (acos of a cosine near one is not).
+        let sin_t = axis.cross(w).length();
+        let theta = sin_t.atan2(axis.dot(w));
+        if theta <= theta_max && theta_max > 0.0 {
+            // p(θ) = 1/θ_max over dω = sinθ dθ dφ; finite on the axis itself.
+            1.0 / (TAU * theta_max * sin_t.max(1e-12))
+        } else {
+            0.0
+        }
     }
     box_ops!(DVec3);
     fn half_boundary(e: DVec3) -> f64 {

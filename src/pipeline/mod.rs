@@ -15,6 +15,7 @@ pub mod derivatives;
 pub mod dim;
 pub mod directions;
 pub mod emitters;
+pub mod lamp_aim;
 pub mod lobe;
 pub mod medium;
 pub mod moments;

@@ -15,6 +15,7 @@
 //! stream derived from (seed, item, sample), so results do not depend on threads.
 
 use super::dim::Dim;
+use super::lamp_aim;
 use super::lobe::{Lobe, phase_log_slope};
 use super::medium::pass_probability;
 use super::point_leg;
@@ -41,6 +42,10 @@ pub struct Settings {
     /// vertices (`super::point_leg`); off only to measure what it gains.
     #[serde(default = "yes")]
     pub point_legs: bool,
+    /// At medium vertices near a point lamp, one extra leg aimed near it (3D,
+    /// `super::lamp_aim`); off only to measure what it gains.
+    #[serde(default = "yes")]
+    pub aimed_legs: bool,
 }
 
 fn yes() -> bool {
@@ -54,6 +59,7 @@ impl Default for Settings {
             rr_depth: 3,
             sampling: Sampling::default(),
             point_legs: true,
+            aimed_legs: true,
         }
     }
 }
@@ -212,6 +218,20 @@ pub fn radiance_path_parts<W: World>(
     s: &mut Sampler,
     rays: &mut u64,
 ) -> PathRadiance {
+    radiance_path_shared(world, (start, dir, skip, lobe_pdf), None, settings, s, rays)
+}
+
+/// [`radiance_path_parts`] whose first leg estimates only `share` = (light, w) of
+/// that point light's light scattered along it: an aimed leg from `start`
+/// estimates the rest (`super::lamp_aim`).
+fn radiance_path_shared<W: World>(
+    world: &W,
+    (start, dir, skip, lobe_pdf): (VecOf<W>, VecOf<W>, Option<u32>, Option<f64>),
+    mut share: Option<(usize, f64)>,
+    settings: &Settings,
+    s: &mut Sampler,
+    rays: &mut u64,
+) -> PathRadiance {
     let (mut p, mut dir, mut skip, mut pdf_prev) = (start, dir, skip, lobe_pdf);
     let mut beta = Rgb::ONE;
     let mut l = Rgb::ZERO;
@@ -224,7 +244,10 @@ pub fn radiance_path_parts<W: World>(
         // An unbounded medium ends at the world sphere: paths leaving it escape, so a
         // thin non-absorbing fog cannot keep a path scattering far away forever.
         let s_max = hit.map_or_else(|| world.world_exit(p, dir), |h| h.t);
-        let leg = medium.map(|m| point_leg::leg(world, m, (p, dir, s_max), settings.point_legs));
+        // The lamp's light on this leg is shared with the aimed leg drawn at its
+        // start, if one was.
+        let leg = medium.map(|m| point_leg::leg(world, m, (p, dir, s_max), settings.point_legs).with_share(share));
+        let mut aim = None;
         let flight = match (medium, &leg) {
             (Some(m), Some(leg)) => {
                 if leg.samples_lights() {
@@ -249,7 +272,10 @@ pub fn radiance_path_parts<W: World>(
                     phase: m.phase,
                     travel: dir,
                 };
-                (lobe, leg.filter(|l| l.samples_lights()).map(|l| (l, t)))
+                if settings.aimed_legs {
+                    aim = lamp_aim::aim(world, m, p);
+                }
+                (lobe, leg.filter(|l| l.gathers_apart()).map(|l| (l, t)))
             }
             (Flight::Pass { weight }, None) => {
                 first.get_or_insert(FirstEvent::Escape);
@@ -300,6 +326,11 @@ pub fn radiance_path_parts<W: World>(
             break;
         }
         let (w, weight, pdf) = lobe.sample(s);
+        share = None;
+        if let (Some(a), Some(m)) = (aim, medium) {
+            l += beta * a.aimed_leg(world, m, (p, dir), s, rays).1;
+            share = Some((a.light, a.path_share::<W::S>(&m.phase, dir, w)));
+        }
         beta *= weight;
         dir = w;
         pdf_prev = Some(pdf);
@@ -377,13 +408,26 @@ pub fn sample_at_each<W: World>(
     if weight == Rgb::ZERO {
         return (parts, None);
     }
+    // A medium point near a lamp also aims a leg at it (`super::lamp_aim`); it is
+    // light from the medium, seen by `each` like a light sample.
+    let mut share = None;
+    if let (Lobe::Phase { travel, phase }, Some(m), true) = (*lobe, world.medium(), settings.aimed_legs)
+        && let Some(a) = lamp_aim::aim(world, m, x)
+    {
+        let (aimed_w, aimed) = a.aimed_leg(world, m, (x, travel), s, rays);
+        if aimed != Rgb::ZERO {
+            each(aimed_w, aimed);
+            parts.multiple += aimed;
+        }
+        share = Some((a.light, a.path_share::<W::S>(&phase, travel, w)));
+    }
     if keep_path < 1.0 {
         if s.next_f64() >= keep_path {
             return (parts, None);
         }
         weight /= keep_path;
     }
-    let path = radiance_path_parts(world, x, w, skip, Some(pdf), settings, s, rays);
+    let path = radiance_path_shared(world, (x, w, skip, Some(pdf)), share, settings, s, rays);
     let brought = weight * path.radiance;
     let from_medium = weight * path.from_medium();
     parts.multiple += from_medium;

@@ -34,6 +34,12 @@ pub struct Leg<S: Dim> {
     pieces: SmallVec<[(f64, f64); 4]>,
     /// (index into the world's point lights, the leg's distribution towards it).
     near: SmallVec<[(usize, Equiangular); 2]>,
+    /// Whether free flight along the leg also gathers the lights (its vertex's NEE):
+    /// then the equiangular samples are MIS-weighted against it.
+    with_flight: bool,
+    /// (a light, the share of its light on this leg that the leg estimates): the
+    /// rest is estimated by aimed legs (`super::lamp_aim`).
+    share: Option<(usize, f64)>,
 }
 
 /// The leg o + t·d, 0 ≤ t ≤ `s_max`, through `medium`; lights are sampled along it
@@ -69,6 +75,38 @@ pub fn leg<W: World>(
         dir,
         pieces,
         near,
+        with_flight: true,
+        share: None,
+    }
+}
+
+/// A leg o + t·d, 0 ≤ t ≤ `s_max`, that gathers only light `k`'s light scattered
+/// along it, by one equiangular sample, wherever the lamp lies (no free flight:
+/// `super::lamp_aim`'s aimed legs). Surfaces are not looked for up front: the
+/// sample's own point is tested for being seen from o (one any-hit ray, where a
+/// closest hit would cost more and serve no other sample).
+pub fn leg_towards<W: World>(
+    world: &W,
+    medium: &Medium<W::S, W::Region>,
+    (origin, dir, s_max): (VecOf<W>, VecOf<W>, f64),
+    k: usize,
+) -> Leg<W::S> {
+    use super::medium::Region;
+    let pieces: SmallVec<[(f64, f64); 4]> = medium.region.pieces(origin, dir, s_max).into_iter().collect();
+    let mut near = SmallVec::new();
+    let span = pieces.first().zip(pieces.last()).map(|(&(a, _), &(_, b))| (a, b));
+    if let Some((a, b)) = span.filter(|&(a, b)| (b - a).is_finite() && b > a) {
+        let position = world.point_lights()[k].position;
+        let h_min = 1e-9 * world.scale();
+        near.push((k, Equiangular::towards::<W::S>((origin, dir), position, h_min, (a, b))));
+    }
+    Leg {
+        origin,
+        dir,
+        pieces,
+        near,
+        with_flight: false,
+        share: None,
     }
 }
 
@@ -81,6 +119,27 @@ impl<S: Dim> Leg<S> {
     /// Does the leg sample any light?
     pub fn samples_lights(&self) -> bool {
         !self.near.is_empty()
+    }
+
+    /// Does the leg gather any light apart from its vertex's plain NEE (samples
+    /// along it, or a share left to aimed legs)?
+    pub fn gathers_apart(&self) -> bool {
+        !self.near.is_empty() || self.share.is_some()
+    }
+
+    /// The leg estimates only `share` of light `k`'s light scattered along it
+    /// (both its equiangular samples and its free-flight vertex's NEE).
+    pub fn with_share(mut self, share: Option<(usize, f64)>) -> Self {
+        self.share = share;
+        self
+    }
+
+    /// The factor on light `k`'s light gathered along the leg.
+    fn share_of(&self, k: usize) -> f64 {
+        match self.share {
+            Some((j, w)) if j == k => w,
+            _ => 1.0,
+        }
     }
 
     /// The medium length of the leg before distance `t`.
@@ -121,7 +180,18 @@ impl<S: Dim> Leg<S> {
                 continue;
             }
             let pdf = eq.pdf(t);
-            let weight = power_heuristic(pdf, self.flight_pdf(medium.sigma_t, t));
+            let weight = if self.with_flight {
+                power_heuristic(pdf, self.flight_pdf(medium.sigma_t, t))
+            } else {
+                1.0
+            } * self.share_of(k);
+            // An aimed leg runs to the world's exit: a surface before t ends it.
+            if !self.with_flight {
+                *rays += 1;
+                if world.occluded(self.origin, self.dir, t, None) {
+                    continue;
+                }
+            }
             let x = self.origin + self.dir * t;
             let light = std::slice::from_ref(&world.point_lights()[k]);
             let lit = point_lights(world, light, x, &lobe, None, rays, &mut ignore);
@@ -149,7 +219,7 @@ impl<S: Dim> Leg<S> {
                 Some((_, eq)) => power_heuristic(flight_pdf, eq.pdf(t)),
                 None => 1.0,
             };
-            sum += lit * weight;
+            sum += lit * (weight * self.share_of(k));
         }
         sum
     }
