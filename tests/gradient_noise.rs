@@ -116,9 +116,11 @@ fn the_noise_estimate_follows_the_gradients_spread_in_3d() {
 
 /// 96² field, 150 records, against a 2048-spp path-traced reference: shrinking
 /// lowers the relative error for every record seed (measured relMSE ratios 0.65,
-/// 0.68, 0.66 for seeds 1–3; bound 0.8) and the RMSE over the seeds (0.97, 0.79,
-/// 1.03 per seed: the brightest pixels, next to the light, hold the RMSE and
-/// single seeds swing there).
+/// 0.68, 0.66 for seeds 1–3 when written, 0.59, 0.78, 0.64 since; bound 0.8: seed
+/// 2 has little margin left, and a change to the 2D paths' random numbers can move
+/// it past — 0.81 on seed 1 with 3D's far legs tried in 2D) and the RMSE over the
+/// seeds (0.97, 0.79, 1.03 per seed: the brightest pixels, next to the light, hold
+/// the RMSE and single seeds swing there).
 #[test]
 fn shrinking_noisy_gradients_lowers_the_error() {
     let s = scene();
