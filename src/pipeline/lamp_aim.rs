@@ -55,7 +55,7 @@ pub fn aim<W: World>(world: &W, medium: &Medium<W::S, W::Region>, x: VecOf<W>) -
         return None;
     }
     let mean_sigma = medium.sigma_t.element_sum() / 3.0;
-    let reach = (1.0 / mean_sigma).min(0.1 * world.scale());
+    let reach = point_leg::near_reach(world, medium);
     let d_min = 1e-9 * world.scale();
     let mut best: Option<(f64, Aim<VecOf<W>>, f64)> = None;
     for (light, lamp) in world.point_lights().iter().enumerate() {

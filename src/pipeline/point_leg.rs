@@ -38,6 +38,25 @@ use smallvec::SmallVec;
 /// not yet understood; 2D keeps the legs within a mean free path.
 const FAR_MEAN_FREE_PATHS: f64 = 3.0;
 
+/// How near a leg must pass a light to sample it for the light's peak: a mean free
+/// path, at most a tenth of the scene (also the reach of `super::lamp_aim`'s cones).
+pub fn near_reach<W: World>(world: &W, medium: &Medium<W::S, W::Region>) -> f64 {
+    let mean_sigma = medium.sigma_t.element_sum() / 3.0;
+    (1.0 / mean_sigma).min(0.1 * world.scale())
+}
+
+/// The medium pieces of o + t·d, 0 ≤ t ≤ `s_max`, and their span (first start, last
+/// end), if any.
+#[allow(clippy::type_complexity)]
+fn medium_pieces<S: Dim, R: super::medium::Region<S>>(
+    medium: &Medium<S, R>,
+    (origin, dir, s_max): (S::Vec, S::Vec, f64),
+) -> (SmallVec<[(f64, f64); 4]>, Option<(f64, f64)>) {
+    let pieces: SmallVec<[(f64, f64); 4]> = medium.region.pieces(origin, dir, s_max).into_iter().collect();
+    let span = pieces.first().zip(pieces.last()).map(|(&(a, _), &(_, b))| (a, b));
+    (pieces, span)
+}
+
 /// One leg o + t·d of a path up to its next surface (or the world's exit): its
 /// medium pieces and the point lights it passes near.
 pub struct Leg<S: Dim> {
@@ -62,15 +81,13 @@ pub fn leg<W: World>(
     (origin, dir, s_max): (VecOf<W>, VecOf<W>, f64),
     sample_lights: bool,
 ) -> Leg<W::S> {
-    use super::medium::Region;
-    let pieces: SmallVec<[(f64, f64); 4]> = medium.region.pieces(origin, dir, s_max).into_iter().collect();
+    let (pieces, span) = medium_pieces(medium, (origin, dir, s_max));
     let mut near = SmallVec::new();
-    let span = pieces.first().zip(pieces.last()).map(|(&(a, _), &(_, b))| (a, b));
     if let Some((a, b)) =
         span.filter(|&(a, b)| sample_lights && medium.sigma_s != Rgb::ZERO && (b - a).is_finite() && b > a)
     {
         let mean_sigma = medium.sigma_t.element_sum() / 3.0;
-        let reach = (1.0 / mean_sigma).min(0.1 * world.scale());
+        let reach = near_reach(world, medium);
         let h_min = 1e-9 * world.scale();
         for (k, light) in world.point_lights().iter().enumerate() {
             let t0 = W::S::dot(light.position - origin, dir).clamp(a, b);
@@ -105,10 +122,8 @@ pub fn leg_towards<W: World>(
     (origin, dir, s_max): (VecOf<W>, VecOf<W>, f64),
     k: usize,
 ) -> Leg<W::S> {
-    use super::medium::Region;
-    let pieces: SmallVec<[(f64, f64); 4]> = medium.region.pieces(origin, dir, s_max).into_iter().collect();
+    let (pieces, span) = medium_pieces(medium, (origin, dir, s_max));
     let mut near = SmallVec::new();
-    let span = pieces.first().zip(pieces.last()).map(|(&(a, _), &(_, b))| (a, b));
     if let Some((a, b)) = span.filter(|&(a, b)| (b - a).is_finite() && b > a) {
         let position = world.point_lights()[k].position;
         let h_min = 1e-9 * world.scale();
