@@ -541,3 +541,35 @@ fn the_reach_options_reach_the_cache_and_the_command() {
         .cached(w.doc.scene(), volcache::core::metric::CacheMethod::Jarosz08, 1.0);
     assert!(!cs.gradient_noise_reach);
 }
+
+/// "reach ≤ lamp distance ×" is on by default at `VOLUME_LAMP_REACH`, as in
+/// `render3d`; unticked, the cache settings leave it out and the copied command
+/// says `--no-lamp-reach`; another factor is copied as `--lamp-reach K`.
+#[test]
+fn the_lamp_reach_reaches_the_cache_and_the_command() {
+    use volcache::pipeline::budget::VOLUME_LAMP_REACH;
+    let path = room_file("lamp_reach");
+    let mut h = harness(app(&path));
+    h.state_mut().volume_mut().set_method(Method3d::Ours);
+    h.step();
+    step_until(&mut h, "the cache with the lamp reach", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let (_, cs, _) = last_level_is_the_librarys_render(w);
+    assert_eq!(cs.lamp_reach, Some(VOLUME_LAMP_REACH));
+    let command = w.command().unwrap();
+    assert!(!command.contains("lamp-reach"), "{command}");
+    h.get_by_label("reach ≤ lamp distance ×").click();
+    h.step();
+    step_until(&mut h, "the cache without the lamp reach", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let (_, cs, _) = last_level_is_the_librarys_render(w);
+    assert_eq!(cs.lamp_reach, None);
+    let command = w.command().unwrap();
+    assert!(command.contains(" --no-lamp-reach"), "{command}");
+    h.state_mut().volume_mut().params.lamp_reach = Some(0.5);
+    h.step();
+    step_until(&mut h, "the cache with half the lamp reach", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let command = w.command().unwrap();
+    assert!(command.contains(" --lamp-reach 0.5"), "{command}");
+}

@@ -4,6 +4,7 @@
 
 mod room3d;
 
+use std::path::Path;
 use std::process::Command;
 
 fn volcache() -> Command {
@@ -59,37 +60,71 @@ fn render3d_writes_exr_png_and_json() {
     assert!(json["rays3d_closest_hit_per_second"].as_f64().unwrap() > 0.0);
 }
 
+/// `render3d scenes3d/deep_lamp.json --method METHOD ARGS --quiet --out DIR/SUB`:
+/// whether it succeeded, its stderr and its JSON summary (if written).
+fn deep_lamp(dir: &Path, method: &str, args: &[&str], sub: &str) -> (bool, String, Option<serde_json::Value>) {
+    let out_dir = dir.join(sub);
+    let out = volcache()
+        .args(["render3d", "scenes3d/deep_lamp.json", "--method", method, "--quiet"])
+        .args(args)
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    let summary = std::fs::read_to_string(out_dir.join(format!("deep_lamp_{method}.json")))
+        .ok()
+        .map(|t| serde_json::from_str::<serde_json::Value>(&t).unwrap());
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+        summary,
+    )
+}
+
 /// `--no-aimed-legs` leaves out the legs aimed near point lamps (to measure what
 /// they gain): the summary says so, and the paths cast fewer rays.
 #[test]
 fn aimed_legs_can_be_left_out() {
     let dir = tempfile::tempdir().unwrap();
     let run = |extra: &[&str], sub: &str| {
-        let out_dir = dir.path().join(sub);
-        let out = volcache()
-            .args([
-                "render3d",
-                "scenes3d/deep_lamp.json",
-                "--method",
-                "pt",
-                "--res",
-                "16x12",
-            ])
-            .args(["--spp", "4", "--seed", "2", "--quiet"])
-            .args(extra)
-            .arg("--out")
-            .arg(&out_dir)
-            .output()
-            .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let text = std::fs::read_to_string(out_dir.join("deep_lamp_pt.json")).unwrap();
-        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+        let args = [&["--res", "16x12", "--spp", "4", "--seed", "2"][..], extra].concat();
+        let (ok, err, summary) = deep_lamp(dir.path(), "pt", &args, sub);
+        assert!(ok, "{err}");
+        summary.unwrap()
     };
     let (aimed, plain) = (run(&[], "aimed"), run(&["--no-aimed-legs"], "plain"));
     assert_eq!(aimed["params"]["settings"]["aimed_legs"], true);
     assert_eq!(plain["params"]["settings"]["aimed_legs"], false);
     let rays = |v: &serde_json::Value| v["rays"].as_u64().unwrap();
     assert!(rays(&aimed) > rays(&plain), "{} vs {} rays", rays(&aimed), rays(&plain));
+}
+
+/// `--lamp-reach K` limits records' radii to K × their distance to the nearest
+/// point light, `VOLUME_LAMP_REACH` by default in 3D; `--no-lamp-reach` lets the
+/// metric alone decide (to measure what the reach gains). The summary records the
+/// setting, and a reach out of range is refused by name.
+#[test]
+fn lamp_reach_is_set_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], sub: &str| {
+        let small = [
+            "--res", "8x6", "--spp", "1", "--rays", "32", "--steps", "4", "--seed", "2",
+        ];
+        deep_lamp(dir.path(), "ours", &[&small[..], extra].concat(), sub)
+    };
+    let reach = |v: &Option<serde_json::Value>| v.as_ref().unwrap()["cache"]["settings"]["lamp_reach"].clone();
+    let (ok, err, default) = run(&[], "default");
+    assert!(ok, "{err}");
+    assert_eq!(reach(&default), volcache::pipeline::budget::VOLUME_LAMP_REACH);
+    let (ok, err, half) = run(&["--lamp-reach", "0.5"], "half");
+    assert!(ok, "{err}");
+    assert_eq!(reach(&half), 0.5);
+    let (ok, err, free) = run(&["--no-lamp-reach"], "free");
+    assert!(ok, "{err}");
+    assert!(reach(&free).is_null());
+    let (ok, err, none) = run(&["--lamp-reach", "0"], "zero");
+    assert!(!ok && none.is_none());
+    assert!(err.contains("--lamp-reach"), "{err}");
 }
 
 #[test]

@@ -198,6 +198,18 @@ impl Workbench3d {
                         .accessible_name("edge reach");
                     p.edge_reach = limited.then_some(k);
                 });
+                let mut limited = p.lamp_reach.is_some();
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut limited, "reach ≤ lamp distance ×").on_hover_text(
+                        "Records reach no farther than this multiple of their distance to the nearest \
+                         point light: the scattered light grows as 1/distance around a lamp, beyond any \
+                         record's Taylor expansion (render3d --lamp-reach; off: --no-lamp-reach)",
+                    );
+                    let mut k = p.lamp_reach.unwrap_or(crate::pipeline::budget::VOLUME_LAMP_REACH);
+                    ui.add_enabled(limited, egui::DragValue::new(&mut k).range(0.01..=100.0).speed(0.05))
+                        .accessible_name("lamp reach");
+                    p.lamp_reach = limited.then_some(k);
+                });
                 if p.method == Method3d::Ours {
                     ui.checkbox(&mut p.gradient_noise_reach, "reach ≤ gradient noise")
                         .on_hover_text(

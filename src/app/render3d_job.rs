@@ -96,6 +96,9 @@ pub struct View3dParams {
     /// Caches: records reach no farther than this multiple of their distance to
     /// the nearest silhouette edge they see (`render3d --edge-reach`).
     pub edge_reach: Option<f64>,
+    /// Caches: records reach no farther than this multiple of their distance to
+    /// the nearest point light (`render3d --lamp-reach`; None: `--no-lamp-reach`).
+    pub lamp_reach: Option<f64>,
     /// Ours: records reach no farther than their multiple-scattering gradient's
     /// noise allows at ε (`render3d --gradient-noise-reach`).
     pub gradient_noise_reach: bool,
@@ -119,6 +122,7 @@ impl View3dParams {
             moment_bands: None,
             surface_cache: false,
             edge_reach: None,
+            lamp_reach: Some(crate::pipeline::budget::VOLUME_LAMP_REACH),
             gradient_noise_reach: false,
         }
     }
@@ -153,6 +157,7 @@ impl View3dParams {
         cs.moment_bands = self.moment_bands;
         cp.surface_eps = self.surface_cache.then(|| default_surface_eps(scene));
         cs.edge_reach = self.edge_reach.map(crate::limits::clamp_edge_reach);
+        cs.lamp_reach = self.lamp_reach.map(crate::limits::clamp_edge_reach);
         // Jarosz 2008 measures no gradient noise: the reach would be infinite.
         cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         (cs, cp)

@@ -347,6 +347,11 @@ impl Workbench3d {
             if let Some(k) = self.params.edge_reach {
                 c += &format!(" --edge-reach {k}");
             }
+            match self.params.lamp_reach {
+                None => c += " --no-lamp-reach",
+                Some(k) if k != crate::pipeline::budget::VOLUME_LAMP_REACH => c += &format!(" --lamp-reach {k}"),
+                Some(_) => {}
+            }
             if self.params.gradient_noise_reach && f.method == Method3d::Ours {
                 c += " --gradient-noise-reach";
             }

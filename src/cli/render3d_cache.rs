@@ -105,6 +105,16 @@ pub struct Cache3dArgs {
     /// Default: the paper's metric alone.
     #[arg(long)]
     pub edge_reach: Option<f64>,
+    /// Limit every record's radii to this multiple of its distance to the nearest
+    /// point light (no rays: the lights' positions alone): the scattered light
+    /// grows as 1/ρ around a lamp, and no Taylor expansion of it reaches farther
+    /// than the lamp is. Default: 2 (`pipeline::budget::VOLUME_LAMP_REACH`).
+    #[arg(long, conflicts_with = "no_lamp_reach")]
+    pub lamp_reach: Option<f64>,
+    /// Let records reach past point lights (the metric alone decides), to measure
+    /// what the lamp reach gains.
+    #[arg(long)]
+    pub no_lamp_reach: bool,
     /// Limit every record's radii by its multiple-scattering gradient's noise
     /// (`core::metric::gradient_noise_radius`): the radius at which that noise,
     /// integrated over the record's ball, adds the error ε allows the Hessian's
@@ -165,7 +175,7 @@ pub enum ImageSplitArg {
 pub struct RecordsArgs {
     /// Reconstruct from these records (from `--records-out` for this image) instead
     /// of placing.
-    #[arg(long, conflicts_with_all = ["eps", "caches", "records_out", "edge_reach"])]
+    #[arg(long, conflicts_with_all = ["eps", "caches", "records_out", "edge_reach", "lamp_reach", "no_lamp_reach"])]
     pub records_in: Option<PathBuf>,
     /// Write the placed records here (JSON), for tiles rendered in other jobs.
     #[arg(long)]
@@ -214,6 +224,9 @@ impl Cache3dArgs {
         }
         if let Some(k) = self.edge_reach {
             super::common::check_range("--edge-reach", k, volcache::limits::EDGE_REACH)?;
+        }
+        if let Some(k) = self.lamp_reach {
+            super::common::check_range("--lamp-reach", k, volcache::limits::EDGE_REACH)?;
         }
         super::common::check_range("--phase-roulette", self.phase_roulette, (0.0, 100.0))?;
         self.record_noise.check()?;
@@ -318,6 +331,11 @@ impl Cache3dArgs {
         cs.second_order = self.second_order;
         cs.direct_samples = self.direct_samples;
         cs.edge_reach = self.edge_reach;
+        if self.no_lamp_reach {
+            cs.lamp_reach = None;
+        } else if let Some(k) = self.lamp_reach {
+            cs.lamp_reach = Some(k);
+        }
         cs.gradient_noise_reach = self.gradient_noise_reach;
         cs.probe.phase_roulette = self.phase_roulette;
         cs.record_noise = self.record_noise.target();

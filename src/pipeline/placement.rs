@@ -20,7 +20,7 @@ use super::moments::{MomentQuery, RecordMoments};
 use super::probe::Outgoing;
 use super::record::{CacheSettings, Cached, RecordData, RecordInfo, compute_record};
 use super::sight::{Near, near_record, near_table, sees_near};
-use super::world::World;
+use super::world::{PointLight, World};
 use crate::core::cache::{Cache, Record};
 use crate::core::color::Rgb;
 use crate::core::metric::gradient_noise_radius;
@@ -208,6 +208,12 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
                 if let Some(k) = cs.edge_reach {
                     extent = extent.within((k * d.nearest_edge).max(metric.r_min));
                 }
+                if let Some(k) = cs.lamp_reach {
+                    let lamp = nearest_lamp(world.point_lights(), p.y);
+                    if lamp.is_finite() {
+                        extent = extent.within((k * lamp).max(metric.r_min));
+                    }
+                }
                 if cs.gradient_noise_reach {
                     let reach = gradient_noise_radius::<W::S>(luminance.value, d.multiple_grad_var, &metric);
                     extent = extent.within(reach);
@@ -248,6 +254,15 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
         direct_samples: cs.direct_samples,
         value_noise,
     })
+}
+
+/// Distance from `x` to the nearest point light that emits, +∞ without one.
+fn nearest_lamp<S: Dim>(lights: &[PointLight<S>], x: S::Vec) -> f64 {
+    lights
+        .iter()
+        .filter(|l| l.intensity.max_element() > 0.0)
+        .map(|l| <S as crate::core::space::Space>::length(l.position - x))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The memo's light field of `key`, computed (and its wall time added to

@@ -81,6 +81,17 @@ pub struct CacheSettings {
     /// peaks around it. None: the paper's metric alone.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub edge_reach: Option<f64>,
+    /// Limit every radius of a record to this multiple of its distance to the
+    /// nearest point light, seen or not (no rays: the lights' positions alone).
+    /// Around a point light the light scattered once and again grows as 1/ρ (3D),
+    /// and a Taylor expansion of 1/ρ converges only within ρ of its centre: a
+    /// record beside the lamp, whose metric knows only its own derivatives,
+    /// otherwise carries its peak value over a ball many times its distance to
+    /// the lamp. On by default in 3D ([`super::budget::VOLUME_LAMP_REACH`]); None
+    /// in 2D, whose peak is log(1/ρ) and whose budgets path trace the pixels
+    /// near a point light instead ([`Self::near_light_paths`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lamp_reach: Option<f64>,
     /// Limit every radius of ours' records to
     /// [`crate::core::metric::gradient_noise_radius`] of their multiple-scattering
     /// gradient's noise ([`RecordData::multiple_grad_var`]): a record whose
@@ -151,6 +162,7 @@ impl CacheSettings {
             direct_samples: None,
             direct_share: None,
             edge_reach: None,
+            lamp_reach: (S::DIM == 3).then_some(super::budget::VOLUME_LAMP_REACH),
             gradient_noise_reach: false,
             shrink_noisy_gradients: true,
             record_noise: None,
