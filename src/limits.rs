@@ -69,7 +69,8 @@ pub const MEDIUM_CLAMP: (f64, f64) = (1e-6, 1e6);
 /// useful range of depths).
 pub const GRADING: (f64, f64) = (0.0, 30.0);
 /// Reach of a record past the nearest edge it sees, as a multiple of that
-/// distance (`--edge-reach`): below 0.01 every record shrinks to the smallest
+/// distance (`--edge-reach`; also bounds `--lamp-reach`, the same kind of limit
+/// past the nearest point light): below 0.01 every record shrinks to the smallest
 /// radius (one per query point); above 100 it limits nothing.
 pub const EDGE_REACH: (f64, f64) = (0.01, 100.0);
 

@@ -54,7 +54,7 @@ pub fn aim<W: World>(world: &W, medium: &Medium<W::S, W::Region>, x: VecOf<W>) -
     if W::S::DIM != 3 || medium.sigma_s == Rgb::ZERO || world.point_lights().is_empty() {
         return None;
     }
-    let mean_sigma = medium.sigma_t.element_sum() / 3.0;
+    let mean_sigma = crate::core::color::average(medium.sigma_t);
     let reach = point_leg::near_reach(world, medium);
     let d_min = 1e-9 * world.scale();
     let mut best: Option<(f64, Aim<VecOf<W>>, f64)> = None;

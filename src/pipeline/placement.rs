@@ -201,6 +201,8 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             *rays += d.rays;
             records_seconds += d.seconds;
             value_noise.add(d.value_var, d.scattered_luminance());
+            // One distance per record, whichever caches it serves.
+            let lamp = cs.lamp_reach.map(|k| (k, nearest_lamp(world.point_lights(), p.y)));
             for c in missing {
                 let value = d.payload(cached[c]);
                 let luminance = value.luminance();
@@ -208,11 +210,8 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
                 if let Some(k) = cs.edge_reach {
                     extent = extent.within((k * d.nearest_edge).max(metric.r_min));
                 }
-                if let Some(k) = cs.lamp_reach {
-                    let lamp = nearest_lamp(world.point_lights(), p.y);
-                    if lamp.is_finite() {
-                        extent = extent.within((k * lamp).max(metric.r_min));
-                    }
+                if let Some((k, d_lamp)) = lamp.filter(|&(_, d)| d.is_finite()) {
+                    extent = extent.within((k * d_lamp).max(metric.r_min));
                 }
                 if cs.gradient_noise_reach {
                     let reach = gradient_noise_radius::<W::S>(luminance.value, d.multiple_grad_var, &metric);

@@ -41,7 +41,7 @@ const FAR_MEAN_FREE_PATHS: f64 = 3.0;
 /// How near a leg must pass a light to sample it for the light's peak: a mean free
 /// path, at most a tenth of the scene (also the reach of `super::lamp_aim`'s cones).
 pub fn near_reach<W: World>(world: &W, medium: &Medium<W::S, W::Region>) -> f64 {
-    let mean_sigma = medium.sigma_t.element_sum() / 3.0;
+    let mean_sigma = crate::core::color::average(medium.sigma_t);
     (1.0 / mean_sigma).min(0.1 * world.scale())
 }
 
@@ -86,7 +86,7 @@ pub fn leg<W: World>(
     if let Some((a, b)) =
         span.filter(|&(a, b)| sample_lights && medium.sigma_s != Rgb::ZERO && (b - a).is_finite() && b > a)
     {
-        let mean_sigma = medium.sigma_t.element_sum() / 3.0;
+        let mean_sigma = crate::core::color::average(medium.sigma_t);
         let reach = near_reach(world, medium);
         let h_min = 1e-9 * world.scale();
         for (k, light) in world.point_lights().iter().enumerate() {
