@@ -133,7 +133,10 @@ pub struct Cache3dArgs {
     /// scene-relative start.
     #[arg(long)]
     pub surface_eps: Option<f64>,
-    /// Seed of the records' light fields.
+    /// Seed of the records' light fields. `--seed` does not change it (it seeds the
+    /// camera's samples): to measure how the records vary, sweep this too, or runs
+    /// on different `--seed`s share one stream of light fields (README, deep_lamp
+    /// at budget 4).
     #[arg(long, default_value_t = 1)]
     pub cache_seed: u64,
 }

@@ -247,7 +247,9 @@ pub const VOLUME: ErrorModel = ErrorModel {
 /// camera (σ_s 3.8, g −0.4, seeds 1–4) mean 0.250 → 0.300 / 0.256 / 0.249 /
 /// 0.250; a lamp seen from 6.5 mean free paths and `mesh_in_fog.json` (seeds 1–3) unchanged within
 /// 0.5% at k = 2 (at k = 1 within 0.6%, but for mesh_in_fog's seed 3, −7%).
-/// Rays within ±1% of without at k ≥ 1 (k = ½: +18%).
+/// Rays within ±1% of without at k ≥ 1 (k = ½: +18%). Those seeds are the
+/// camera's (`--seed`); the records' light fields shared cache seed 1, so the
+/// seeds vary where records fall, not the light fields' streams.
 pub const VOLUME_LAMP_REACH: f64 = 2.0;
 
 /// ε of a 3D image at budget 1, as a multiple of the scene's default
