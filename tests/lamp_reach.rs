@@ -101,3 +101,61 @@ fn records_reach_no_farther_than_the_lamp() {
         );
     }
 }
+
+/// `volcache caches --lamp-reach` (2D, off by default there): the summary says it,
+/// a small reach makes more records around `point_in_fog.json`'s lamp (16², seed 1:
+/// 48 without, 256 — one per pixel — at 0.05), and a reach out of range is refused
+/// naming the option, writing nothing.
+#[test]
+fn the_2d_caches_take_a_lamp_reach() {
+    let d = tempfile::tempdir().unwrap();
+    let run = |sub: &str, extra: &[&str]| {
+        let out = d.path().join(sub);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_volcache"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["caches", "flatland_scenes/point_in_fog.json", "--method", "ours"])
+            .args([
+                "--res",
+                "16x16",
+                "--ref-spp",
+                "64",
+                "--rays",
+                "128",
+                "--seed",
+                "1",
+                "--quiet",
+            ])
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .arg("--ref-cache")
+            .arg(d.path().join("ref"))
+            .output()
+            .unwrap();
+        (o, out)
+    };
+    let summary = |out: &Path| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap()
+    };
+    let (o, out) = run("without", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let without = summary(&out);
+    assert!(without.get("lamp_reach").is_none(), "{without}");
+    let (o, out) = run("near", &["--lamp-reach", "0.05"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let near = summary(&out);
+    assert_eq!(near["lamp_reach"], 0.05);
+    let records = |s: &serde_json::Value| s["run"]["records"].as_u64().unwrap();
+    println!("records: {} without, {} at 0.05", records(&without), records(&near));
+    assert!(
+        records(&near) > 2 * records(&without),
+        "{} vs {}",
+        records(&near),
+        records(&without)
+    );
+    let (o, out) = run("far", &["--lamp-reach", "1e9"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--lamp-reach must lie between"), "{err}");
+    assert!(!out.exists());
+}

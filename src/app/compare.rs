@@ -74,11 +74,13 @@ impl CompareParams {
     /// with `app`'s seed.
     pub fn field_params(&self, scene: &Scene, app: &FieldParams) -> FieldParams {
         let [w, h] = self.res.unwrap_or([(app.width / 2).max(1), (app.height / 2).max(1)]);
+        // Of L_s, what the cache holds, whatever the scene renders.
+        let (scene_fp, _) = field_runs::cached_quantity(FieldParams::from_scene(scene));
         FieldParams {
             width: w.max(1),
             height: h.max(1),
             seed: app.seed,
-            ..FieldParams::from_scene(scene)
+            ..scene_fp
         }
     }
 

@@ -89,6 +89,13 @@ pub struct CacheArgs {
     /// Default: the paper's metric alone.
     #[arg(long)]
     pub edge_reach: Option<f64>,
+    /// Limit every record's radii to this multiple of its distance to the nearest
+    /// point light that emits (`CacheSettings::lamp_reach`; no rays: the lights'
+    /// positions): the light scattered around a point light peaks as it nears it,
+    /// and a Taylor expansion of that peak converges only within that distance.
+    /// Default: off in 2D (on in 3D, `render3d --lamp-reach`; README).
+    #[arg(long)]
+    pub lamp_reach: Option<f64>,
     /// Limit every record's radii by its multiple-scattering gradient's noise
     /// (`core::metric::gradient_noise_radius`): the radius at which that noise,
     /// integrated over the record's ball, adds the error ε allows the Hessian's
@@ -192,8 +199,17 @@ impl CacheArgs {
     }
 }
 
+/// The field of the options on `scene`: of L_s, what the cache holds, whatever
+/// quantity the scene renders (`field_runs::cached_quantity`; said on stderr).
 pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
-    let mut fp = FieldParams::from_scene(scene);
+    let (mut fp, changed) = field_runs::cached_quantity(FieldParams::from_scene(scene));
+    if changed && !a.quiet {
+        eprintln!(
+            "note: {} renders {}; a cache holds in-scattered radiance, so its field and the reference are of L_s",
+            scene.source,
+            super::field::quantity_label(scene.desc.render.quantity)
+        );
+    }
     match a.res {
         Some([w, h]) => (fp.width, fp.height) = (w as usize, h as usize),
         None => (fp.width, fp.height) = ((fp.width / 2).max(1), (fp.height / 2).max(1)),
@@ -212,6 +228,7 @@ pub fn cache_settings(scene: &Scene, method: CacheMethod, a: &CacheArgs, fp: &Fi
     cs.second_order = a.second_order;
     (cs.direct_samples, cs.direct_share) = a.direct_for(scene);
     cs.edge_reach = a.edge_reach_for(scene);
+    cs.lamp_reach = a.lamp_reach;
     cs.gradient_noise_reach = a.gradient_noise_reach;
     cs.probe.phase_roulette = a.phase_roulette;
     cs.record_noise = a.record_noise.target();
@@ -259,6 +276,8 @@ struct Summary<'a> {
     point_scatter: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     edge_reach: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lamp_reach: Option<f64>,
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     gradient_noise_reach: bool,
     run: &'a MethodRun,
@@ -314,6 +333,9 @@ pub fn check_cache_args(a: &CacheArgs, fp: &FieldParams) -> anyhow::Result<()> {
     }
     if let Some(k) = a.edge_reach {
         check_range("--edge-reach", k, limits::EDGE_REACH)?;
+    }
+    if let Some(k) = a.lamp_reach {
+        check_range("--lamp-reach", k, limits::EDGE_REACH)?;
     }
     check_range("--phase-roulette", a.phase_roulette, (0.0, 100.0))?;
     a.record_noise.check()?;
@@ -377,6 +399,7 @@ pub fn run(a: CachesArgs) -> anyhow::Result<ExitCode> {
         direct_samples: run.direct_samples,
         point_scatter: run.point_scatter,
         edge_reach: a.cache.edge_reach_for(&scene),
+        lamp_reach: a.cache.lamp_reach,
         gradient_noise_reach: a.cache.gradient_noise_reach,
         second_order: a.cache.second_order,
         run: &run,

@@ -195,7 +195,7 @@ pub fn run(a: FieldArgs) -> anyhow::Result<ExitCode> {
     write_outputs(files, json, &progress)
 }
 
-fn quantity_label(q: Quantity) -> &'static str {
+pub(super) fn quantity_label(q: Quantity) -> &'static str {
     match q {
         Quantity::Ls => "L_s",
         Quantity::Fluence => "fluence",
