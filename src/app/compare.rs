@@ -75,7 +75,7 @@ impl CompareParams {
     pub fn field_params(&self, scene: &Scene, app: &FieldParams) -> FieldParams {
         let [w, h] = self.res.unwrap_or([(app.width / 2).max(1), (app.height / 2).max(1)]);
         // Of L_s, what the cache holds, whatever the scene renders.
-        let (scene_fp, _) = field_runs::cached_quantity(FieldParams::from_scene(scene));
+        let scene_fp = field_runs::cached_quantity(FieldParams::from_scene(scene));
         FieldParams {
             width: w.max(1),
             height: h.max(1),

@@ -202,8 +202,8 @@ impl CacheArgs {
 /// The field of the options on `scene`: of L_s, what the cache holds, whatever
 /// quantity the scene renders (`field_runs::cached_quantity`; said on stderr).
 pub fn field_params(scene: &Scene, a: &CacheArgs) -> FieldParams {
-    let (mut fp, changed) = field_runs::cached_quantity(FieldParams::from_scene(scene));
-    if changed && !a.quiet {
+    let mut fp = field_runs::cached_quantity(FieldParams::from_scene(scene));
+    if fp.quantity != scene.desc.render.quantity && !a.quiet {
         eprintln!(
             "note: {} renders {}; a cache holds in-scattered radiance, so its field and the reference are of L_s",
             scene.source,

@@ -105,17 +105,12 @@ pub fn cache_settings(method: CacheMethod, eps: f64, fp: &FieldParams, rays: usi
 /// L_s even where the scene renders another quantity (`point_in_fog.json` renders
 /// fluence: its cache was measured against a fluence reference, RMSE 0.20 for a
 /// mean of 0.16, a bias of −0.14, whatever the settings). The part is kept: the
-/// cache reconstructs each. Whether the scene asked for another quantity is the
-/// second value, for the caller to say so.
-pub fn cached_quantity(fp: FieldParams) -> (FieldParams, bool) {
-    let changed = fp.quantity != Quantity::Ls;
-    (
-        FieldParams {
-            quantity: Quantity::Ls,
-            ..fp
-        },
-        changed,
-    )
+/// cache reconstructs each.
+pub fn cached_quantity(fp: FieldParams) -> FieldParams {
+    FieldParams {
+        quantity: Quantity::Ls,
+        ..fp
+    }
 }
 
 /// What the search for ε found.
