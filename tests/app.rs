@@ -322,6 +322,24 @@ fn a_compare_run_finishes_with_finite_numbers_for_both_methods() {
 /// the comparison and is carried by the command that reproduces it.
 #[test]
 fn the_gradient_noise_reach_box_reaches_the_comparison() {
+    a_methods_box_reaches_the_comparison("reach ≤ gradient noise", " --gradient-noise-reach ", |p| {
+        p.gradient_noise_reach
+    });
+}
+
+/// The compare panel's "reach ≤ lamp distance ×" (off in 2D by default) sets the
+/// 3D default factor, restarts the comparison and is carried by the command.
+#[test]
+fn the_lamp_reach_box_reaches_the_comparison() {
+    a_methods_box_reaches_the_comparison("reach ≤ lamp distance ×", " --lamp-reach 2 ", |p| {
+        p.lamp_reach == Some(volcache::pipeline::budget::VOLUME_LAMP_REACH)
+    });
+}
+
+/// Ticks the "Methods" section's box `label` and checks that `set` holds of the
+/// parameters, that the comparison restarted and that its command has `flag`
+/// (which it had not before).
+fn a_methods_box_reaches_the_comparison(label: &str, flag: &str, set: fn(&CompareParams) -> bool) {
     let mut wb = workbench();
     tiny_compare(&mut wb);
     // Tall enough that the open "Methods" section is on screen unscrolled.
@@ -329,24 +347,16 @@ fn the_gradient_noise_reach_box_reaches_the_comparison() {
     h.get_by_label("Compare view").click();
     h.step();
     assert_eq!(h.state().compare_starts(), 1);
-    assert!(
-        !h.state_mut()
-            .compare_command()
-            .unwrap()
-            .contains("--gradient-noise-reach")
-    );
+    assert!(!h.state_mut().compare_command().unwrap().contains(flag.trim()));
+    assert!(!set(&h.state().compare_params));
     h.get_by_label("Methods").click(); // closed by default
     h.run_steps(2);
-    h.get_by_label("reach ≤ gradient noise").click();
+    h.get_by_label(label).click();
     h.step();
-    assert!(h.state().compare_params.gradient_noise_reach);
+    assert!(set(&h.state().compare_params), "{label}");
     assert_eq!(h.state().compare_starts(), 2);
-    assert!(
-        h.state_mut()
-            .compare_command()
-            .unwrap()
-            .contains(" --gradient-noise-reach ")
-    );
+    let command = h.state_mut().compare_command().unwrap();
+    assert!(command.contains(flag), "{command}");
 }
 
 #[test]
@@ -454,6 +464,27 @@ fn params_follow_the_app_resolution_unless_set() {
         "volcache figure compare --caches 150 --rays 512 --steps 16 --gradient-noise-reach \
          --res 128x128 --ref-spp 256 --seed 7 --out o"
     );
+    // The lamp reach (off by default in 2D) reaches both methods' settings and the
+    // command; out-of-range factors are clamped as the edge reach's are.
+    assert_eq!(p.cache_settings(CacheMethod::Ours, &fp).lamp_reach, None);
+    let lamp = CompareParams {
+        lamp_reach: Some(1.5),
+        ..p.clone()
+    };
+    for m in [CacheMethod::Ours, CacheMethod::Jarosz08] {
+        assert_eq!(lamp.cache_settings(m, &fp).lamp_reach, Some(1.5));
+    }
+    assert_eq!(
+        compare_command(None, &fp, &lamp, "o"),
+        "volcache figure compare --caches 150 --rays 512 --steps 16 --lamp-reach 1.5 \
+         --res 128x128 --ref-spp 256 --seed 7 --out o"
+    );
+    let huge = CompareParams {
+        lamp_reach: Some(1e9),
+        ..p.clone()
+    };
+    let k = huge.cache_settings(CacheMethod::Ours, &fp).lamp_reach.unwrap();
+    assert_eq!(k, volcache::limits::EDGE_REACH.1);
 }
 
 #[test]

@@ -46,6 +46,9 @@ pub struct CompareParams {
     /// Records reach no farther than this multiple of their distance to the
     /// nearest edge they see (`--edge-reach`).
     pub edge_reach: Option<f64>,
+    /// Records reach no farther than this multiple of their distance to the
+    /// nearest point light (`--lamp-reach`; off by default in 2D, as `caches`).
+    pub lamp_reach: Option<f64>,
     /// Ours' records reach no farther than their gradient's noise allows at ε
     /// (`--gradient-noise-reach`; Jarosz 2008 measures no gradient noise).
     pub gradient_noise_reach: bool,
@@ -63,6 +66,7 @@ impl Default for CompareParams {
             point_scatter: None,
             near_light_paths: None,
             edge_reach: None,
+            lamp_reach: None,
             gradient_noise_reach: false,
         }
     }
@@ -86,13 +90,15 @@ impl CompareParams {
 
     /// The cache settings of `method` (as `volcache caches`' defaults with these
     /// rays, steps, seed, straight-light samples, once-scattered point-light
-    /// directions, paths near point lights, edge reach and gradient-noise reach, the last for ours only).
+    /// directions, paths near point lights, edge and lamp reach, and gradient-noise
+    /// reach, the last for ours only).
     pub fn cache_settings(&self, method: CacheMethod, fp: &FieldParams) -> CacheSettings {
         let mut cs = field_runs::cache_settings(method, 0.05, fp, self.rays, self.steps);
         cs.direct_samples = self.direct_samples.map(|n| n.max(1));
         cs.point_scatter = self.point_scatter.map(|n| n.max(1));
         cs.near_light_paths = self.near_light_paths.map(|n| n.max(1));
         cs.edge_reach = self.edge_reach.map(crate::limits::clamp_edge_reach);
+        cs.lamp_reach = self.lamp_reach.map(crate::limits::clamp_edge_reach);
         cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         cs
     }
@@ -249,6 +255,9 @@ pub fn compare_command(scene: Option<&str>, fp: &FieldParams, p: &CompareParams,
         direct += &format!(" --near-light-paths {n}");
     }
     let mut reach = cs.edge_reach.map_or(String::new(), |k| format!(" --edge-reach {k}"));
+    if let Some(k) = cs.lamp_reach {
+        reach += &format!(" --lamp-reach {k}");
+    }
     if cs.gradient_noise_reach {
         reach += " --gradient-noise-reach";
     }

@@ -152,6 +152,16 @@ impl Workbench {
                 .accessible_name("edge reach");
             p.edge_reach = limited.then_some(k);
             ui.end_row();
+            let mut limited = p.lamp_reach.is_some();
+            ui.checkbox(&mut limited, "reach ≤ lamp distance ×").on_hover_text(
+                "Records reach no farther than this multiple of their distance to the nearest point light (--lamp-reach): \
+                 the light's log(1/r) peak lies outside a record's Taylor expansion beyond that distance",
+            );
+            let mut k = p.lamp_reach.unwrap_or(crate::pipeline::budget::VOLUME_LAMP_REACH);
+            ui.add_enabled(limited, DragValue::new(&mut k).range(0.01..=100.0).speed(0.05))
+                .accessible_name("lamp reach");
+            p.lamp_reach = limited.then_some(k);
+            ui.end_row();
             ui.checkbox(&mut p.gradient_noise_reach, "reach ≤ gradient noise")
                 .on_hover_text("Ours' records reach no farther than where their multiple-scattering gradient's noise adds the error ε allows (--gradient-noise-reach): pays where the records' gradients are noise and their light varies, as around a lamp in forward-scattering fog");
             ui.end_row();
