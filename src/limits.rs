@@ -80,6 +80,10 @@ pub fn clamp_edge_reach(k: f64) -> f64 {
     k.clamp(EDGE_REACH.0, EDGE_REACH.1)
 }
 
+/// `--eye-cone`: a half-angle in degrees (`CacheSettings::eye_cone_deg`); beyond
+/// 90° a record would serve points the eye sees on its other side.
+pub const EYE_CONE_DEG: (f64, f64) = (0.01, 90.0);
+
 /// `--record-noise`: a relative standard error (below 1e-4 a record would want
 /// millions of directions).
 pub const RECORD_NOISE: (f64, f64) = (1e-4, 10.0);

@@ -115,6 +115,13 @@ pub struct Cache3dArgs {
     /// what the lamp reach gains.
     #[arg(long)]
     pub no_lamp_reach: bool,
+    /// A record serves only the points the camera sees within this half-angle
+    /// (degrees) of it: the L_s it holds leaves towards the camera, a direction
+    /// that turns fast near the camera, and a record near it would otherwise hand
+    /// its value to points whose ω_o is tens of degrees away (anisotropic media
+    /// only; README, "The eye cone"). Off by default.
+    #[arg(long)]
+    pub eye_cone: Option<f64>,
     /// Limit every record's radii by its multiple-scattering gradient's noise
     /// (`core::metric::gradient_noise_radius`): the radius at which that noise,
     /// integrated over the record's ball, adds the error ε allows the Hessian's
@@ -178,7 +185,7 @@ pub enum ImageSplitArg {
 pub struct RecordsArgs {
     /// Reconstruct from these records (from `--records-out` for this image) instead
     /// of placing.
-    #[arg(long, conflicts_with_all = ["eps", "caches", "records_out", "edge_reach", "lamp_reach", "no_lamp_reach"])]
+    #[arg(long, conflicts_with_all = ["eps", "caches", "records_out", "edge_reach", "lamp_reach", "no_lamp_reach", "eye_cone"])]
     pub records_in: Option<PathBuf>,
     /// Write the placed records here (JSON), for tiles rendered in other jobs.
     #[arg(long)]
@@ -230,6 +237,9 @@ impl Cache3dArgs {
         }
         if let Some(k) = self.lamp_reach {
             super::common::check_range("--lamp-reach", k, volcache::limits::EDGE_REACH)?;
+        }
+        if let Some(a) = self.eye_cone {
+            super::common::check_range("--eye-cone", a, volcache::limits::EYE_CONE_DEG)?;
         }
         super::common::check_range("--phase-roulette", self.phase_roulette, (0.0, 100.0))?;
         self.record_noise.check()?;
@@ -339,6 +349,7 @@ impl Cache3dArgs {
         } else if let Some(k) = self.lamp_reach {
             cs.lamp_reach = Some(k);
         }
+        cs.eye_cone_deg = self.eye_cone;
         cs.gradient_noise_reach = self.gradient_noise_reach;
         cs.probe.phase_roulette = self.phase_roulette;
         cs.record_noise = self.record_noise.target();
@@ -375,6 +386,19 @@ fn file_surfaces(
 /// The straight light's samples per point for records read from a file: none if
 /// its records hold that light (then asking for samples is an error: they would
 /// count it twice), else the file's count or the one asked for.
+/// The eye cone a records file was placed with, at this render's camera (the file
+/// is valid for it: [`ValidFor::mismatch`]).
+fn file_eye_cone(
+    scene: &Scene,
+    cp: &volcache::volume::cached::CachedRenderParams,
+    deg: Option<f64>,
+) -> Option<volcache::pipeline::eye_cone::EyeCone<volcache::core::space::D3>> {
+    let cam = volcache::volume::render::camera(scene, cp.image.width, cp.image.height);
+    let g = scene.medium.as_ref().map_or(0.0, |m| m.g());
+    let eye = volcache::core::phase::Outgoing::TowardsPoint(cam.position);
+    volcache::pipeline::eye_cone::EyeCone::towards(eye, deg, g)
+}
+
 fn file_direct_samples(file: Option<u32>, asked: Option<u32>, path: &std::path::Path) -> anyhow::Result<Option<u32>> {
     match (file, asked) {
         (None, Some(_)) => anyhow::bail!(
@@ -432,6 +456,7 @@ pub fn run_cached(
                 direct_samples: file_direct_samples(loaded.file.direct_samples, a.direct_samples, path)?,
                 // The file does not say how noisy its records are.
                 value_noise: Default::default(),
+                eye_cone: file_eye_cone(scene, &cp, loaded.file.eye_cone_deg),
             }
         }
         None => {

@@ -289,7 +289,7 @@ fn reconstruct(
                         .caches
                         .iter()
                         .zip(&near)
-                        .map(|(c, n)| interpolate(scene, (c, n), x, second_order, &mut scratch, &mut rays))
+                        .map(|(c, n)| interpolate(scene, (c, n, None), x, second_order, &mut scratch, &mut rays))
                         .collect();
                     let covered = cached.iter().all(Option::is_some);
                     let cached: Vec<Rgb> = cached.into_iter().map(|c| c.unwrap_or(Rgb::ZERO)).collect();

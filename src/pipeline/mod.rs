@@ -15,6 +15,7 @@ pub mod derivatives;
 pub mod dim;
 pub mod directions;
 pub mod emitters;
+pub mod eye_cone;
 pub mod lamp_aim;
 pub mod lobe;
 pub mod medium;

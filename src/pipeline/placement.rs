@@ -16,6 +16,7 @@
 //! is what a fresh placement would take (its checks plus its records' capture).
 
 use super::dim::Dim;
+use super::eye_cone::{EyeCone, served};
 use super::moments::{MomentQuery, RecordMoments};
 use super::probe::Outgoing;
 use super::record::{CacheSettings, Cached, RecordData, RecordInfo, compute_record};
@@ -24,6 +25,7 @@ use super::world::{PointLight, World};
 use crate::core::cache::{Cache, Record};
 use crate::core::color::Rgb;
 use crate::core::metric::gradient_noise_radius;
+use crate::core::space::Space;
 use crate::core::taylor_rgb::TaylorRgb;
 use crate::progress::{Cancelled, Progress};
 use rayon::prelude::*;
@@ -57,6 +59,10 @@ pub trait QuerySource<S: Dim>: Sync {
 
 pub type RadianceCache<S> = Cache<S, TaylorRgb<S>>;
 
+/// A cache as interpolation reads it: the records, the occluders near each
+/// ([`near_table`]) and the eye cone they serve within, if any.
+pub type Served<'a, S> = (&'a RadianceCache<S>, &'a [Near], Option<&'a EyeCone<S>>);
+
 /// Light fields per query point, shared by placements of the same scene, method,
 /// probe settings and source (and edge reach asked for or not: only then do they
 /// hold [`RecordData::nearest_edge`]).
@@ -84,6 +90,9 @@ pub struct Placement<S: Dim> {
     pub direct_samples: Option<u32>,
     /// How noisy the records placed here are (not those read from a file).
     pub value_noise: ValueNoise,
+    /// The records serve only the points their eye sees near them
+    /// ([`CacheSettings::eye_cone_deg`]).
+    pub eye_cone: Option<EyeCone<S>>,
 }
 
 /// The records' own noise, summed over the records a placement made: the
@@ -176,10 +185,17 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
     let (mut records_seconds, mut capture_wall) = (0.0, 0.0);
     // Per cache, per record: the occluders near it (`super::sight`).
     let near: Vec<Vec<Near>> = caches.iter().map(|c| near_table(world, c)).collect();
+    // A source's points all leave towards one eye (a camera) or along a direction.
+    let g = world.medium().map_or(0.0, |m| <W::S as Dim>::phase_g(&m.phase));
+    let eye_cone = EyeCone::towards(source.outgoing(<W::S as Space>::zero()), cs.eye_cone_deg, g);
     type State<S> = (Vec<RadianceCache<S>>, Vec<Vec<Near>>);
     let uncovered = |(caches, near): &State<W::S>, y, rays: &mut u64| -> Vec<usize> {
         (0..caches.len())
-            .filter(|&c| !caches[c].is_covered_where(y, |i, x| sees_near(world, &near[c][i], x, y, rays)))
+            .filter(|&c| {
+                !caches[c].is_covered_where(y, |i, x| {
+                    served(eye_cone.as_ref(), x, y) && sees_near(world, &near[c][i], x, y, rays)
+                })
+            })
             .collect()
     };
     let mut state = (caches, near);
@@ -252,6 +268,7 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
         seconds: start.elapsed().as_secs_f64() - capture_wall + records_seconds,
         direct_samples: cs.direct_samples,
         value_noise,
+        eye_cone,
     })
 }
 
@@ -365,18 +382,19 @@ pub fn place_with_count<W: World, Q: QuerySource<W::S>>(
     Ok(placement)
 }
 
-/// L_s at `y` from the covering records that see it, clamped at zero (radiance is
-/// non-negative; an extrapolated gradient can overshoot). None when no visible
-/// record covers `y`. `near`: the records' occluders, [`near_table`] of `cache`.
+/// L_s at `y` from the covering records that see it (and serve it, within `cone`:
+/// [`Placement::eye_cone`]), clamped at zero (radiance is non-negative; an
+/// extrapolated gradient can overshoot). None when no visible record covers `y`.
+/// `near`: the records' occluders, [`near_table`] of `cache`.
 pub fn interpolate<W: World>(
     world: &W,
-    (cache, near): (&RadianceCache<W::S>, &[Near]),
+    (cache, near, cone): Served<'_, W::S>,
     y: <W::S as crate::core::space::Space>::Vec,
     second_order: bool,
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
-    interpolate_by(world, (cache, near), y, second_order, scratch, rays, |i| {
+    interpolate_by(world, (cache, near, cone), y, second_order, scratch, rays, |i| {
         cache.records()[i].value
     })
 }
@@ -394,21 +412,22 @@ pub fn interpolate_moments<W: World>(
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
 ) -> Option<Rgb> {
-    interpolate_by(world, (cache, near), y, second_order, scratch, rays, |i| {
+    // Moments serve every ω_o: no cone.
+    interpolate_by(world, (cache, near, None), y, second_order, scratch, rays, |i| {
         table[i].towards(&cache.records()[i].value, query)
     })
 }
 
 fn interpolate_by<W: World>(
     world: &W,
-    (cache, near): (&RadianceCache<W::S>, &[Near]),
+    (cache, near, cone): Served<'_, W::S>,
     y: <W::S as crate::core::space::Space>::Vec,
     second_order: bool,
     scratch: &mut Vec<(usize, f64)>,
     rays: &mut u64,
     payload: impl Fn(usize) -> TaylorRgb<W::S>,
 ) -> Option<Rgb> {
-    let keep = |i: usize, x| sees_near(world, &near[i], x, y, rays);
+    let keep = |i: usize, x| served(cone, x, y) && sees_near(world, &near[i], x, y, rays);
     interpolate_kept(cache, y, second_order, scratch, keep, payload)
 }
 

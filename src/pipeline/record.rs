@@ -92,6 +92,12 @@ pub struct CacheSettings {
     /// near a point light instead ([`Self::near_light_paths`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lamp_reach: Option<f64>,
+    /// A record placed for an eye (a camera) serves only the points the eye sees
+    /// within this half-angle (degrees) of it (`super::eye_cone`): L_s towards
+    /// the eye turns with x, and its expansion is singular at the eye. Anisotropic
+    /// media only. Off by default (measured on deep_lamp, README).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eye_cone_deg: Option<f64>,
     /// Limit every radius of ours' records to
     /// [`crate::core::metric::gradient_noise_radius`] of their multiple-scattering
     /// gradient's noise ([`RecordData::multiple_grad_var`]): a record whose
@@ -163,6 +169,7 @@ impl CacheSettings {
             direct_share: None,
             edge_reach: None,
             lamp_reach: (S::DIM == 3).then_some(super::budget::VOLUME_LAMP_REACH),
+            eye_cone_deg: None,
             gradient_noise_reach: false,
             shrink_noisy_gradients: true,
             record_noise: None,

@@ -6,6 +6,7 @@
 use super::render::RenderParams;
 use super::scene::Scene;
 use crate::core::space::D3;
+use crate::pipeline::eye_cone::EyeCone;
 use crate::pipeline::moments::RecordMoments;
 use serde::Serialize;
 
@@ -112,6 +113,9 @@ pub struct CacheView<'a> {
     /// The records leave out the light arriving straight from the lights: sample it
     /// this many times at every march point ([`Placement::direct_samples`]).
     pub direct_samples: Option<u32>,
+    /// The records serve only the points their eye sees near them
+    /// ([`Placement::eye_cone`]).
+    pub eye_cone: Option<EyeCone<D3>>,
 }
 
 impl<'a> CacheView<'a> {
@@ -122,6 +126,7 @@ impl<'a> CacheView<'a> {
             moments: None,
             surfaces: None,
             direct_samples: None,
+            eye_cone: None,
         }
     }
 
@@ -134,6 +139,7 @@ impl<'a> CacheView<'a> {
             moments: (complete && !table.is_empty()).then_some(table.as_slice()),
             surfaces: None,
             direct_samples: placement.direct_samples,
+            eye_cone: placement.eye_cone,
         }
     }
 

@@ -112,7 +112,14 @@ pub fn reconstruct(
                         rays,
                     )
                 }
-                _ => interpolate(scene, (cache, &near), p, second_order, &mut scratch, rays),
+                _ => interpolate(
+                    scene,
+                    (cache, &near, view.eye_cone.as_ref()),
+                    p,
+                    second_order,
+                    &mut scratch,
+                    rays,
+                ),
             };
             match cached {
                 Some(c) => PointLs {

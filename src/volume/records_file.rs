@@ -124,6 +124,10 @@ pub struct RecordsFile {
     /// The surface cache placed beside the records, when the render had one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surfaces: Option<StoredSurfaces>,
+    /// The records serve only the points the camera sees within this half-angle
+    /// (degrees) of them (`CacheSettings::eye_cone_deg`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eye_cone_deg: Option<f64>,
 }
 
 /// A surface cache as stored: its placement's numbers and its records.
@@ -250,6 +254,7 @@ impl RecordsFile {
             records,
             direct_samples: p.direct_samples,
             surfaces,
+            eye_cone_deg: p.eye_cone.map(|c| c.half_angle_deg),
         }
     }
 
@@ -364,6 +369,13 @@ fn check_header(f: &RecordsFile) -> Result<(), (String, String)> {
         return Err((
             "eps".into(),
             format!("must lie between {lo:e} and {hi:e}, got {}", f.eps),
+        ));
+    }
+    let (lo, hi) = crate::limits::EYE_CONE_DEG;
+    if let Some(a) = f.eye_cone_deg.filter(|a| !(a.is_finite() && (lo..=hi).contains(a))) {
+        return Err((
+            "eye_cone_deg".into(),
+            format!("must lie between {lo} and {hi} degrees, got {a}"),
         ));
     }
     if let Some(n) = f.direct_samples.filter(|n| !(1..=4096).contains(n)) {
