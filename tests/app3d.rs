@@ -573,3 +573,31 @@ fn the_lamp_reach_reaches_the_cache_and_the_command() {
     let command = w.command().unwrap();
     assert!(command.contains(" --lamp-reach 0.5"), "{command}");
 }
+
+/// The 3D panel's "serve within ° of the camera" box sets the eye cone at the
+/// suggested angle; the view's last level is the library's render with it, and
+/// the copied command carries `--eye-cone`.
+#[test]
+fn the_eye_cone_reaches_the_cache_and_the_command() {
+    use volcache::pipeline::eye_cone::SUGGESTED_EYE_CONE_DEG;
+    let path = room_file("eye_cone");
+    let mut h = harness(app(&path));
+    h.state_mut().volume_mut().set_method(Method3d::Ours);
+    h.step();
+    step_until(&mut h, "the cache without the eye cone", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let (_, cs, _) = last_level_is_the_librarys_render(w);
+    assert_eq!(cs.eye_cone_deg, None);
+    assert!(!w.command().unwrap().contains("eye-cone"));
+    h.get_by_label("serve within ° of the camera").click();
+    h.step();
+    step_until(&mut h, "the cache with the eye cone", settled);
+    let w = h.state().volume.as_ref().unwrap();
+    let (_, cs, _) = last_level_is_the_librarys_render(w);
+    assert_eq!(cs.eye_cone_deg, Some(SUGGESTED_EYE_CONE_DEG));
+    let command = w.command().unwrap();
+    assert!(
+        command.contains(&format!(" --eye-cone {SUGGESTED_EYE_CONE_DEG}")),
+        "{command}"
+    );
+}

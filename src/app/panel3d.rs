@@ -210,6 +210,20 @@ impl Workbench3d {
                         .accessible_name("lamp reach");
                     p.lamp_reach = limited.then_some(k);
                 });
+                let mut coned = p.eye_cone_deg.is_some();
+                ui.horizontal(|ui| {
+                    ui.checkbox(&mut coned, "serve within ° of the camera").on_hover_text(
+                        "A record serves only the points the camera sees within this angle of it: the light it \
+                         holds leaves towards the camera, a direction that turns fast near the camera \
+                         (render3d --eye-cone; anisotropic fog only)",
+                    );
+                    let mut a = p
+                        .eye_cone_deg
+                        .unwrap_or(crate::pipeline::eye_cone::SUGGESTED_EYE_CONE_DEG);
+                    ui.add_enabled(coned, egui::DragValue::new(&mut a).range(0.01..=90.0).speed(0.1))
+                        .accessible_name("eye cone");
+                    p.eye_cone_deg = coned.then_some(a);
+                });
                 if p.method == Method3d::Ours {
                     ui.checkbox(&mut p.gradient_noise_reach, "reach ≤ gradient noise")
                         .on_hover_text(

@@ -99,6 +99,9 @@ pub struct View3dParams {
     /// Caches: records reach no farther than this multiple of their distance to
     /// the nearest point light (`render3d --lamp-reach`; None: `--no-lamp-reach`).
     pub lamp_reach: Option<f64>,
+    /// Caches: a record serves only the points the camera sees within this
+    /// half-angle (degrees) of it (`render3d --eye-cone`; None: off).
+    pub eye_cone_deg: Option<f64>,
     /// Ours: records reach no farther than their multiple-scattering gradient's
     /// noise allows at ε (`render3d --gradient-noise-reach`).
     pub gradient_noise_reach: bool,
@@ -123,6 +126,7 @@ impl View3dParams {
             surface_cache: false,
             edge_reach: None,
             lamp_reach: Some(crate::pipeline::budget::VOLUME_LAMP_REACH),
+            eye_cone_deg: None,
             gradient_noise_reach: false,
         }
     }
@@ -158,6 +162,8 @@ impl View3dParams {
         cp.surface_eps = self.surface_cache.then(|| default_surface_eps(scene));
         cs.edge_reach = self.edge_reach.map(crate::limits::clamp_edge_reach);
         cs.lamp_reach = self.lamp_reach.map(crate::limits::clamp_edge_reach);
+        let (lo, hi) = crate::limits::EYE_CONE_DEG;
+        cs.eye_cone_deg = self.eye_cone_deg.map(|a| a.clamp(lo, hi));
         // Jarosz 2008 measures no gradient noise: the reach would be infinite.
         cs.gradient_noise_reach = self.gradient_noise_reach && method == CacheMethod::Ours;
         (cs, cp)

@@ -352,6 +352,9 @@ impl Workbench3d {
                 Some(k) if k != crate::pipeline::budget::VOLUME_LAMP_REACH => c += &format!(" --lamp-reach {k}"),
                 Some(_) => {}
             }
+            if let Some(a) = self.params.eye_cone_deg {
+                c += &format!(" --eye-cone {a}");
+            }
             if self.params.gradient_noise_reach && f.method == Method3d::Ours {
                 c += " --gradient-noise-reach";
             }

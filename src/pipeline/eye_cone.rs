@@ -21,6 +21,10 @@ use super::dim::Dim;
 use crate::core::phase::Outgoing;
 use crate::core::space::Space;
 
+/// The half-angle the app's box starts from: 0.1 rad, the best of 0.1 and 0.2 rad
+/// on deep_lamp (README, "The eye cone").
+pub const SUGGESTED_EYE_CONE_DEG: f64 = 5.73;
+
 /// The cone at an eye within which a record serves points.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EyeCone<S: Space> {
