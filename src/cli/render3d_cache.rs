@@ -386,19 +386,6 @@ fn file_surfaces(
 /// The straight light's samples per point for records read from a file: none if
 /// its records hold that light (then asking for samples is an error: they would
 /// count it twice), else the file's count or the one asked for.
-/// The eye cone a records file was placed with, at this render's camera (the file
-/// is valid for it: [`ValidFor::mismatch`]).
-fn file_eye_cone(
-    scene: &Scene,
-    cp: &volcache::volume::cached::CachedRenderParams,
-    deg: Option<f64>,
-) -> Option<volcache::pipeline::eye_cone::EyeCone<volcache::core::space::D3>> {
-    let cam = volcache::volume::render::camera(scene, cp.image.width, cp.image.height);
-    let g = scene.medium.as_ref().map_or(0.0, |m| m.g());
-    let eye = volcache::core::phase::Outgoing::TowardsPoint(cam.position);
-    volcache::pipeline::eye_cone::EyeCone::towards(eye, deg, g)
-}
-
 fn file_direct_samples(file: Option<u32>, asked: Option<u32>, path: &std::path::Path) -> anyhow::Result<Option<u32>> {
     match (file, asked) {
         (None, Some(_)) => anyhow::bail!(
@@ -456,7 +443,8 @@ pub fn run_cached(
                 direct_samples: file_direct_samples(loaded.file.direct_samples, a.direct_samples, path)?,
                 // The file does not say how noisy its records are.
                 value_noise: Default::default(),
-                eye_cone: file_eye_cone(scene, &cp, loaded.file.eye_cone_deg),
+                // The file is valid for this camera (`ValidFor::mismatch`).
+                eye_cone: volcache::volume::cached::eye_cone(scene, &cp, loaded.file.eye_cone_deg),
             }
         }
         None => {

@@ -26,6 +26,7 @@ use super::scene::Scene;
 use crate::core::metric::CacheMethod;
 use crate::core::rng::mix64;
 use crate::core::space::D3;
+use crate::pipeline::eye_cone::EyeCone;
 pub use crate::pipeline::placement::CountError;
 use crate::pipeline::placement::{
     QueryPoint, QuerySource, place as place_points, place_onto as place_points_onto, place_with_count as place_count,
@@ -128,6 +129,15 @@ impl QuerySource<D3> for CameraSamples<'_> {
     fn outgoing(&self, _: DVec3) -> Outgoing<DVec3> {
         Outgoing::TowardsPoint(self.cam.position)
     }
+}
+
+/// The cone of `half_angle_deg` at the camera of `params`' image within which
+/// records placed for it serve points ([`CameraSamples`]' placement makes the
+/// same), None where it does not apply (`pipeline::eye_cone`).
+pub fn eye_cone(scene: &Scene, params: &CachedRenderParams, half_angle_deg: Option<f64>) -> Option<EyeCone<D3>> {
+    let cam = camera(scene, params.image.width, params.image.height);
+    let g = scene.medium.as_ref().map_or(0.0, |m| m.g());
+    EyeCone::towards(Outgoing::TowardsPoint(cam.position), half_angle_deg, g)
 }
 
 /// Place records over every query point of the window.
