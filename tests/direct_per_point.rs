@@ -240,7 +240,11 @@ fn per_point_straight_light_in_3d_images() {
     let mut ratios = Vec::new();
     for seed in 1..=12 {
         let error = |ds| {
-            let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1.0, p.image.settings);
+            let mut cs = CacheSettings::new::<volcache::core::space::D3>(
+                CacheMethod::Ours,
+                1.0,
+                p.image.first_vertex_settings(),
+            );
             (cs.probe.rays, cs.probe.steps, cs.seed, cs.direct_samples) = (512, 8, seed, ds);
             match render_cached(&s, &p, &cs, Some(32), &mut RecordMemo3::new(), &Progress::new()) {
                 Ok(r) => {

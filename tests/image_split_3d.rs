@@ -60,7 +60,7 @@ fn placed(scene: &Scene, p: &CachedRenderParams) -> Placement {
     let mut cs = CacheSettings::new::<volcache::core::space::D3>(
         CacheMethod::Ours,
         default_eps(CacheMethod::Ours, scene) * 4.0,
-        RenderParams::from_scene(scene).settings,
+        RenderParams::from_scene(scene).first_vertex_settings(),
     );
     (cs.probe.rays, cs.probe.steps, cs.direct_samples) = (256, 8, Some(4));
     place(scene, p, &cs, &mut RecordMemo::new(), &Progress::new()).unwrap()

@@ -608,7 +608,8 @@ fn item15_points_the_camera_cannot_see_get_no_records() {
     let mut p = CachedRenderParams::from_scene(&scene);
     (p.image.width, p.image.height, p.image.spp) = (4, 3, 4);
     p.surface_paths = 1;
-    let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1e-9, p.image.settings);
+    let mut cs =
+        CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 1e-9, p.image.first_vertex_settings());
     (cs.probe.rays, cs.probe.steps) = (64, 2);
     let r = render_cached(
         &scene,

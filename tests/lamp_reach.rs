@@ -49,7 +49,7 @@ fn reaches(method: CacheMethod, lamp_reach: Option<f64>, seed: u64) -> Vec<(f64,
         } else {
             default_eps(method, &s)
         },
-        RenderParams::from_scene(&s).settings,
+        RenderParams::from_scene(&s).first_vertex_settings(),
     );
     assert_eq!(cs.lamp_reach, Some(VOLUME_LAMP_REACH), "on by default in 3D");
     (cs.probe.rays, cs.probe.steps, cs.seed, cs.lamp_reach) = (128, 8, seed, lamp_reach);

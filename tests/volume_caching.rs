@@ -42,7 +42,7 @@ fn settings(method: CacheMethod, scene: &Scene, rays: usize, steps: usize, seed:
     let mut cs = CacheSettings::new::<volcache::core::space::D3>(
         method,
         default_eps(method, scene),
-        RenderParams::from_scene(scene).settings,
+        RenderParams::from_scene(scene).first_vertex_settings(),
     );
     cs.probe.rays = rays;
     cs.probe.steps = steps;

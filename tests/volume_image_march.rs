@@ -34,7 +34,7 @@ fn render(scene: &Scene, p: &CachedRenderParams, memo: &mut RecordMemo) -> Cache
     let mut cs = CacheSettings::new::<volcache::core::space::D3>(
         CacheMethod::Ours,
         default_eps(CacheMethod::Ours, scene),
-        RenderParams::from_scene(scene).settings,
+        RenderParams::from_scene(scene).first_vertex_settings(),
     );
     cs.probe.rays = 1024;
     cs.probe.steps = 12;

@@ -32,7 +32,8 @@ fn moments_keep_a_cache_valid_when_the_camera_orbits() {
     let scene = Scene::from_json(LAMP_FOG, "lamp_fog.json", Path::new(".")).unwrap();
     let mut cp = CachedRenderParams::from_scene(&scene);
     cp.image.spp = 2;
-    let mut cs = CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 8e-3, cp.image.settings);
+    let mut cs =
+        CacheSettings::new::<volcache::core::space::D3>(CacheMethod::Ours, 8e-3, cp.image.first_vertex_settings());
     cs.probe.rays = 256;
     cs.probe.steps = 8;
     cs.moment_bands = Some(6);

@@ -47,7 +47,7 @@ fn settings(scene: &Scene, seed: u64) -> CacheSettings {
     let mut cs = CacheSettings::new::<volcache::core::space::D3>(
         CacheMethod::Ours,
         default_eps(CacheMethod::Ours, scene),
-        RenderParams::from_scene(scene).settings,
+        RenderParams::from_scene(scene).first_vertex_settings(),
     );
     cs.probe.rays = 1024;
     cs.probe.steps = 12;

@@ -182,7 +182,7 @@ pub fn cache_settings(
     steps: usize,
 ) -> (CacheSettings, CachedRenderParams) {
     let eps = eps.unwrap_or_else(|| default_eps(method, scene));
-    let mut cs = CacheSettings::new::<D3>(method, eps, image.settings);
+    let mut cs = CacheSettings::new::<D3>(method, eps, image.first_vertex_settings());
     cs.probe.rays = rays;
     cs.probe.steps = steps;
     let mut cp = CachedRenderParams::from_scene(scene);

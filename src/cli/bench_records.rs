@@ -255,7 +255,7 @@ pub fn run(a: RecordsBench) -> anyhow::Result<ExitCode> {
         }
         AnyScene::Volume(s) => {
             let image = volcache::volume::render::RenderParams::from_scene(s);
-            let mut cs = CacheSettings::new::<D3>(CacheMethod::Ours, 1.0, image.settings);
+            let mut cs = CacheSettings::new::<D3>(CacheMethod::Ours, 1.0, image.first_vertex_settings());
             cs.direct_samples = a.direct_samples;
             cs.seed = a.seed;
             let (lo, hi) = (s.bounds.min, s.bounds.max);

@@ -336,7 +336,7 @@ impl Cache3dArgs {
         if let Some(n) = self.caches {
             anyhow::ensure!(n > 0, "--caches must be at least 1");
         }
-        let mut cs = CacheSettings::new::<volcache::core::space::D3>(method, eps, image.settings);
+        let mut cs = CacheSettings::new::<volcache::core::space::D3>(method, eps, image.first_vertex_settings());
         cs.probe.rays = self.rays;
         cs.probe.steps = self.steps;
         cs.probe.grading = self.grading;

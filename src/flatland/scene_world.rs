@@ -109,6 +109,10 @@ impl World for Scene {
         lights::emitter_nee(self, p, lobe, skip, mis, s, rays, each)
     }
 
+    fn has_extended_lights(&self) -> bool {
+        !self.emitters.is_empty()
+    }
+
     fn emitter_pdf(&self, from: DVec2, prim: u32, _y: DVec2) -> f64 {
         lights::emitter_pdf(self, from, prim)
     }

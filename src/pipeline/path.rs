@@ -52,6 +52,27 @@ fn yes() -> bool {
     true
 }
 
+impl Settings {
+    /// The settings of the light arriving at the `n`-th vertex after a path's start
+    /// (1: its first scattering or surface point): the paths traced from there may
+    /// add only `max_depth` − `n` vertices, so that an estimate assembled at that
+    /// vertex (a camera ray's march point, a light field's medium sample or hit)
+    /// traces no deeper than one path from the start. `max_depth` 0: the light
+    /// straight at the vertex only ([`sample_at_each`]). Saturates: ask [`Self::reaches`]
+    /// whether the vertex counts at all.
+    pub fn past(self, n: u32) -> Settings {
+        Settings {
+            max_depth: self.max_depth.saturating_sub(n),
+            ..self
+        }
+    }
+
+    /// Whether a path from the start may hold an `n`-th vertex (n ≤ `max_depth`).
+    pub fn reaches(&self, n: u32) -> bool {
+        n <= self.max_depth
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -399,11 +420,18 @@ pub fn sample_at_each<W: World>(
         PointLights::Included => world.delta_lights_each(x, lobe, skip, rays, each),
         PointLights::Left => world.directional_lights_each(x, lobe, skip, rays, each),
     };
+    // With no vertex left after `x`, no path follows: the lights' samples take
+    // their whole share (no MIS against a lobe-sampled ray), as at a path's last
+    // vertex, and no aimed leg scatters again.
+    let path_follows = settings.max_depth > 0;
     let mut parts = Parts {
         direct: delta,
-        single: world.sampled_nee_each(x, lobe, skip, true, s, rays, each),
+        single: world.sampled_nee_each(x, lobe, skip, path_follows, s, rays, each),
         multiple: Rgb::ZERO,
     };
+    if !path_follows {
+        return (parts, None);
+    }
     let (w, mut weight, pdf) = lobe.sample(s);
     if weight == Rgb::ZERO {
         return (parts, None);
@@ -897,4 +925,24 @@ pub fn estimate_radiance<W: World>(
     estimate_with(spp as u64, seed, 0, |s| {
         radiance_path(world, x, w, None, None, settings, s, &mut rays).0
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Settings;
+
+    /// A vertex n after the start leaves max_depth − n vertices to its paths, none
+    /// below zero, and counts only while n ≤ max_depth.
+    #[test]
+    fn vertices_past_the_start_leave_the_rest_of_the_depth() {
+        let s = Settings {
+            max_depth: 2,
+            ..Settings::default()
+        };
+        assert_eq!(s.past(1).max_depth, 1);
+        assert_eq!(s.past(2).max_depth, 0);
+        assert_eq!(s.past(3).max_depth, 0);
+        assert_eq!(s.past(1).rr_depth, s.rr_depth, "only the depth changes");
+        assert!(s.reaches(2) && !s.reaches(3));
+    }
 }

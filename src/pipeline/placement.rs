@@ -199,12 +199,13 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             .collect()
     };
     let mut state = (caches, near);
+    let holds_light = cs.records_hold_light(world.has_extended_lights());
     let (query_points, rays) = walk(
         units,
         progress,
         &mut state,
         |k, out| source.points(k, out),
-        |st, p: &QueryPoint<W::S>, rays| !uncovered(st, p.y, rays).is_empty(),
+        |st, p: &QueryPoint<W::S>, rays| holds_light && !uncovered(st, p.y, rays).is_empty(),
         |st, p, rays| {
             let missing = uncovered(st, p.y, rays);
             let (caches, near) = st;

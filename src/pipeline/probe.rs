@@ -96,6 +96,11 @@ pub struct ProbeSettings {
     /// [`super::record::CacheSettings::point_scatter`]): the records then hold the
     /// rest, without the log (2D) or 1/r (3D) peak around each light.
     pub point_lights: PointLights,
+    /// The path tracer's settings for the light at x: its `max_depth` counts the
+    /// vertices after x, so a hit or medium sample (one vertex after x) traces
+    /// with [`Settings::past`](1) and counts only its emission when x has no
+    /// vertex left. (A 3D record serves a camera ray's first vertex: its settings
+    /// are the image's past 1.)
     pub settings: Settings,
 }
 
@@ -501,6 +506,10 @@ fn trace_field<W: World>(
     let march = March::new(if march_len > 0.0 { march_len } else { limit }, ps.steps, ps.grading);
     let t_cut = march.length;
     let paths = ps.paths.max(1);
+    // What the light at the field's hits and medium samples may trace: they are
+    // one vertex after x (None: x has none left, and they count nothing but
+    // emission, as a path's last vertex does).
+    let beyond = ps.settings.reaches(1).then(|| ps.settings.past(1));
     type Traced<S> = Result<(ProbeRay<S>, u64), Cancelled>;
     let rays: Vec<Traced<W::S>> = dirs
         .par_iter()
@@ -513,7 +522,14 @@ fn trace_field<W: World>(
             let mut rays = 1u64;
             let keep = keep_probability::<W>(at_x, importance, dir, ps.phase_roulette);
             let hit_record = hit.map(|h| {
-                let (sp, mut radiance) = radiance_leaving(world, &h, dir, paths, &ps.settings, &mut s, &mut rays);
+                let (sp, mut radiance) = match beyond {
+                    Some(settings) => radiance_leaving(world, &h, dir, paths, &settings, &mut s, &mut rays),
+                    None => {
+                        let sp = world.surface(&h, dir);
+                        let emitted = if sp.active { sp.emission } else { Rgb::ZERO };
+                        (sp, emitted)
+                    }
+                };
                 if !emitted && sp.active {
                     radiance -= sp.emission;
                 }
@@ -553,7 +569,9 @@ fn trace_field<W: World>(
                     // is ≈ 1/ξ at an even march's first step): never rouletted.
                     let keep = if i < UNROULETTED_SAMPLES { 1.0 } else { keep };
                     let mut sum = Rgb::ZERO;
-                    if m.contains(p) && with_slopes {
+                    if let (true, Some(beyond)) = (m.contains(p), &beyond)
+                        && with_slopes
+                    {
                         for _ in 0..paths {
                             let one = scattered_with_slope(
                                 world,
@@ -561,7 +579,7 @@ fn trace_field<W: World>(
                                 m.phase,
                                 dir,
                                 (keep, ps.point_lights),
-                                &ps.settings,
+                                beyond,
                                 &mut s,
                                 &mut rays,
                             );
@@ -569,7 +587,7 @@ fn trace_field<W: World>(
                             scattered.push((i, one));
                         }
                         sum = sum * m.sigma_s / paths as f64;
-                    } else if m.contains(p) {
+                    } else if let (true, Some(beyond)) = (m.contains(p), &beyond) {
                         for _ in 0..paths {
                             let each = &mut ignore;
                             sum += sample_at_each(
@@ -578,7 +596,7 @@ fn trace_field<W: World>(
                                 &lobe,
                                 None,
                                 (keep, ps.point_lights),
-                                &ps.settings,
+                                beyond,
                                 &mut s,
                                 &mut rays,
                                 each,

@@ -148,9 +148,11 @@ pub struct NoiseTarget {
 }
 
 impl CacheSettings {
-    /// Defaults for dimension `S` ([`ProbeSettings::default_for`]); the records'
-    /// recursive paths use `paths`, the settings of the image they serve (so that a
-    /// cached image and its path-traced reference trace as deep).
+    /// Defaults for dimension `S` ([`ProbeSettings::default_for`]); `paths` are the
+    /// path settings of the light at the points the records serve: a 2D field's
+    /// (its points start their paths), a 3D image's past its camera rays' first
+    /// vertex (`volume::render::RenderParams::first_vertex_settings`), so that a
+    /// cached image and its path-traced reference trace as deep.
     pub fn new<S: Dim>(method: CacheMethod, eps: f64, paths: Settings) -> Self {
         CacheSettings {
             method,
@@ -176,6 +178,19 @@ impl CacheSettings {
             point_scatter: None,
             near_light_paths: None,
         }
+    }
+
+    /// Whether a record can hold any light: its hits' and medium samples' light
+    /// (when its paths may reach a vertex past the record's point) or the
+    /// emitters and sky its rays see straight (`extended_lights`: the world has
+    /// some; unless the straight light is sampled at every point served). A 3D
+    /// image at `max_depth` 1 of a scene lit by point lamps holds only their
+    /// straight light at its camera rays' points: records would all be black, and
+    /// of the smallest extent (L = 0), one per query point, so placement places
+    /// none and every point is estimated on its own (that straight light, as path
+    /// tracing has it).
+    pub fn records_hold_light(&self, extended_lights: bool) -> bool {
+        self.probe.settings.reaches(1) || (extended_lights && self.probe.emitted && self.direct_samples.is_none())
     }
 
     pub fn metric(&self, scene_scale: f64) -> MetricParams {

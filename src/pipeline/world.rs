@@ -206,6 +206,9 @@ pub trait World: Sync {
     ) -> Rgb {
         self.delta_lights(p, lobe, skip, rays) + self.sampled_nee(p, lobe, skip, mis, s, rays)
     }
+    /// Whether any light has an extent a ray can meet (an emitting primitive, a
+    /// sky), as opposed to delta lights alone.
+    fn has_extended_lights(&self) -> bool;
     /// The pdf with which [`World::sampled_nee`] at `from` picks point `y` of
     /// emitting primitive `prim` (per unit angle or solid angle).
     fn emitter_pdf(&self, from: VecOf<Self>, prim: u32, y: VecOf<Self>) -> f64;

@@ -233,7 +233,8 @@ mod tests {
             &p,
         )
         .unwrap();
-        let mut cs = CacheSettings::new::<crate::core::space::D3>(CacheMethod::Ours, 1.0, image.settings);
+        let mut cs =
+            CacheSettings::new::<crate::core::space::D3>(CacheMethod::Ours, 1.0, image.first_vertex_settings());
         // A plumbing test: two even steps (a graded march needs more than two).
         (cs.probe.rays, cs.probe.steps, cs.probe.grading) = (64, 2, 0.0);
         let cp = CachedRenderParams {

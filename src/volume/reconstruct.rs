@@ -44,7 +44,7 @@ pub fn reconstruct(
     let cache = view.cache;
     // The records' occluders, listed once: most visibility tests need no ray.
     let near = near_table(scene, cache);
-    let settings = &params.image.settings;
+    let settings = &params.image.first_vertex_settings();
     let mut surface_scratch: Vec<(usize, f64)> = Vec::new();
     let paths = params.surface_paths;
     let points = match march_point_lights(scene, params) {
@@ -64,7 +64,7 @@ pub fn reconstruct(
                 rays,
             )
         });
-        cached.unwrap_or_else(|| radiance_leaving(scene, hit, dir, paths, &params.image.settings, s, rays).1)
+        cached.unwrap_or_else(|| radiance_leaving(scene, hit, dir, paths, settings, s, rays).1)
     };
     let mode = match params.adapt_image {
         true => SplitMode::Adaptive {
@@ -157,8 +157,9 @@ pub fn march_reference(
         true => PointLights::Left,
         false => PointLights::Included,
     };
+    let settings = &params.image.first_vertex_settings();
     let surface = |hit: &Hit, dir: DVec3, s: &mut Sampler, rays: &mut u64| {
-        radiance_leaving(scene, hit, dir, params.surface_paths, &params.image.settings, s, rays).1
+        radiance_leaving(scene, hit, dir, params.surface_paths, settings, s, rays).1
     };
     march_image(
         scene,
@@ -171,7 +172,7 @@ pub fn march_reference(
             let mut s = Sampler::new(path_seed, point);
             let mut sum = Rgb::ZERO;
             for _ in 0..paths {
-                sum += traced_at(scene, p, lobe, points, &params.image.settings, &mut s, rays);
+                sum += traced_at(scene, p, lobe, points, settings, &mut s, rays);
             }
             PointLs {
                 value: sum * sigma_s / paths as f64,

@@ -58,6 +58,14 @@ impl RenderParams {
         }
     }
 
+    /// The path settings of the light at a camera ray's first vertex (a march
+    /// point, the first surface, a record serving them): `settings` past 1, so that
+    /// an image assembled there holds the orders a camera path holds, no more
+    /// (at `max_depth` 1 a cached image held 0.40 more than path tracing's 0.114).
+    pub fn first_vertex_settings(&self) -> Settings {
+        self.settings.past(1)
+    }
+
     /// The window rendered: [x0, y0, x1, y1].
     pub fn window(&self) -> [usize; 4] {
         self.crop.unwrap_or([0, 0, self.width, self.height])

@@ -114,6 +114,10 @@ impl World for Scene {
             + lights::emitter_nee(self, p, lobe, skip, mis, s, rays, each)
     }
 
+    fn has_extended_lights(&self) -> bool {
+        !self.emitters.is_empty() || self.sky != Rgb::ZERO
+    }
+
     fn emitter_pdf(&self, from: DVec3, prim: u32, y: DVec3) -> f64 {
         lights::emitter_pdf(self, from, prim, y)
     }

@@ -372,7 +372,7 @@ impl Fixture for D3 {
         let mut p = CachedRenderParams::from_scene(world);
         (p.image.width, p.image.height, p.image.spp, p.image.seed) = (20, 20, 2, 7);
         (p.march_step, p.surface_paths) = (world.scale / 48.0, 1);
-        let paths = volume::render::RenderParams::from_scene(world).settings;
+        let paths = volume::render::RenderParams::from_scene(world).first_vertex_settings();
         let mut cs = CacheSettings::new::<D3>(method, default_eps(method, world), paths);
         (cs.probe.rays, cs.probe.steps, cs.seed) = (256, 8, 3);
         let r = with_threads(threads, || {
