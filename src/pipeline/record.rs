@@ -227,6 +227,10 @@ pub struct RecordData<S: Dim> {
     /// Luminance Hessians the metric uses (with the radiance floor; zero for
     /// jarosz08), per [`Cached`] quantity.
     pub metric_hessians: [S::Mat; 3],
+    /// The luminance of the same floored light's value, per [`Cached`] quantity
+    /// (zero for jarosz08): what the metric measures a record that saw no light at
+    /// all with ([`RecordData::metric_luminance`]).
+    pub floored_values: [f64; 3],
     /// Per basis function of the moments over ω_o, value and derivatives per part
     /// (empty unless asked for: [`CacheSettings::moment_bands`]).
     pub moments: Vec<PartDerivs<S>>,
@@ -313,6 +317,30 @@ impl<S: Dim> RecordData<S> {
     pub fn metric_hessian(&self, q: Cached) -> S::Mat {
         self.metric_hessians[q as usize]
     }
+
+    /// The luminance the metric measures a record of `q` with, `l` being its
+    /// value's: `l`, or, where the record saw no light at all (every part zero), its floored
+    /// light's, whose Hessian the metric takes. Why: with L = 0 every extent is the
+    /// smallest, so a region that is truly dark (fog around a sealed lamp, a 3D
+    /// image's records at max_depth 1 in a scene lit by an area light it does not
+    /// see) took one record per query point: a 16×12 image of a sealed lamp did
+    /// not finish in 5 minutes. Measured with the floor's unit radiance, the
+    /// extent is the geometric one irradiance caching gives (Ward's, Schwarzhaupt
+    /// et al.'s floored Hessian), and serving zero there is right.
+    pub fn metric_luminance(&self, q: Cached, l: f64) -> f64 {
+        // Only a record dark in every part: one part alone can be zero where the
+        // others are not (single scattering in a lamp's shadow, `per_part`), and
+        // there the edge of that zero is near.
+        let p = &self.parts;
+        let dark = [p.direct, p.single, p.multiple]
+            .iter()
+            .all(|t| t.value() == crate::core::color::Rgb::ZERO);
+        if l == 0.0 && dark {
+            self.floored_values[q as usize]
+        } else {
+            l
+        }
+    }
 }
 
 /// The seed of record `id`'s light fields: its k-th light field is `probe::capture`
@@ -398,6 +426,7 @@ pub fn compute_record<W: World>(
     let Derived {
         parts,
         metric_hessians,
+        floored_values,
         moments,
         placed_weights,
         multiple_grad_var,
@@ -405,6 +434,7 @@ pub fn compute_record<W: World>(
     Ok(RecordData {
         parts,
         metric_hessians,
+        floored_values,
         moments,
         placed_weights,
         placed_omega: {
@@ -428,6 +458,7 @@ pub fn compute_record<W: World>(
 struct Derived<S: Dim> {
     parts: PartDerivs<S>,
     metric_hessians: [S::Mat; 3],
+    floored_values: [f64; 3],
     moments: Vec<PartDerivs<S>>,
     placed_weights: Vec<f64>,
     multiple_grad_var: f64,
@@ -447,12 +478,14 @@ impl<S: Dim> Derived<S> {
         for (k, h) in metric_hessians.iter_mut().enumerate() {
             *h = fields.iter().fold(S::zero_mat(), |a, d| a + d.metric_hessians[k]) * (1.0 / n);
         }
+        let floored_values = [0, 1, 2].map(|k| fields.iter().map(|d| d.floored_values[k]).sum::<f64>() / n);
         let moments = (0..fields[0].moments.len())
             .map(|k| PartDerivs::mean(&fields.iter().map(|d| d.moments[k]).collect::<Vec<_>>()))
             .collect();
         Derived {
             parts: PartDerivs::mean(&fields.iter().map(|d| d.parts).collect::<Vec<_>>()),
             metric_hessians,
+            floored_values,
             moments,
             placed_weights: fields[0].placed_weights.clone(),
             multiple_grad_var: fields.iter().map(|d| d.multiple_grad_var).sum::<f64>() / (n * n),
@@ -466,20 +499,15 @@ fn derive<S: Dim>(lf: &mut LightField<S>, cs: &CacheSettings) -> Derived<S> {
     let zero = S::zero_mat();
     let proxy = (cs.method == CacheMethod::Ours).then(|| build(lf, cs.aware.rule));
     let mut multiple_grad_var = 0.0;
-    let (parts, metric_hessians) = match &proxy {
+    let (parts, metric_hessians, floored_values) = match &proxy {
         Some(proxy) => {
             let (parts, floored, var) = aware_with_noise(lf, proxy, &cs.aware, cs.hessian_floor);
             multiple_grad_var = var;
             let floored = floored.unwrap_or(parts);
-            let lum = |t: crate::core::taylor_rgb::TaylorRgb<S>| t.luminance().hess;
-            let hessians = [
-                lum(floored.single + floored.multiple),
-                lum(floored.single),
-                lum(floored.multiple),
-            ];
-            (parts, hessians)
+            let each = [floored.single + floored.multiple, floored.single, floored.multiple].map(|t| t.luminance());
+            (parts, each.map(|l| l.hess), each.map(|l| l.value))
         }
-        None => (unaware(lf), [zero; 3]),
+        None => (unaware(lf), [zero; 3], [0.0; 3]),
     };
     let parts = with_plain_values(parts, lf);
     let (moments, placed_weights) = match cs.moment_bands {
@@ -492,6 +520,7 @@ fn derive<S: Dim>(lf: &mut LightField<S>, cs: &CacheSettings) -> Derived<S> {
     Derived {
         parts,
         metric_hessians,
+        floored_values,
         moments,
         placed_weights,
         multiple_grad_var,
