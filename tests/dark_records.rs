@@ -14,6 +14,7 @@ use volcache::progress::Progress;
 use volcache::volume::cached::{CacheSettings, CachedRenderParams, RecordMemo, default_eps, render_cached};
 use volcache::volume::render::render;
 use volcache::volume::scene::Scene;
+use volcache::volume::surface_cache::default_surface_eps;
 
 /// Fog in a room, a lamp inside a closed box.
 const BOXED_LAMP: &str = r#"{
@@ -37,15 +38,13 @@ fn sealed_lamp() -> Scene {
     Scene::from_json(BOXED_LAMP, "<boxed lamp>", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn cached(s: &Scene, seed: u64) -> (Vec<f64>, usize, u64) {
-    let (r, points) = cached_render(s, seed);
-    let image = r.reconstruction.image.values.iter().map(|c| luminance(*c)).collect();
-    (image, r.placement.record_count(), points)
-}
-
-fn cached_render(s: &Scene, seed: u64) -> (volcache::volume::cached::CachedRender, u64) {
+/// Ours' render of `s` at 8 camera samples per pixel, 128 directions of 8 steps
+/// per record, cache seed `seed`, with a surface cache if `surfaces`; and the
+/// medium records' query points.
+fn cached_render(s: &Scene, seed: u64, surfaces: bool) -> (volcache::volume::cached::CachedRender, u64) {
     let mut p = CachedRenderParams::from_scene(s);
     (p.image.spp, p.image.seed, p.march_step, p.surface_paths) = (8, 7, s.scale / 48.0, 1);
+    p.surface_eps = surfaces.then(|| default_surface_eps(s));
     let mut cs = CacheSettings::new::<volcache::core::space::D3>(
         CacheMethod::Ours,
         default_eps(CacheMethod::Ours, s),
@@ -58,16 +57,29 @@ fn cached_render(s: &Scene, seed: u64) -> (volcache::volume::cached::CachedRende
 }
 
 /// The sealed lamp lights nothing the camera sees: the image is black, and its
-/// records are few (one per query point before: every one of them was black).
+/// records are few (one per query point before: every one of them was black),
+/// in the medium and in the surface cache (460 surface records over 465 query
+/// points before, at 16×12).
 #[test]
 fn a_sealed_lamp_takes_few_records_and_gives_a_black_image() {
     let s = sealed_lamp();
-    let (image, records, points) = cached(&s, 1);
-    eprintln!("{records} records over {points} query points");
-    assert!(image.iter().all(|&v| v == 0.0), "the sealed lamp lights nothing");
+    let (r, points) = cached_render(&s, 1, true);
+    let records = r.placement.record_count();
+    let surfaces = r.surfaces.expect("asked for");
+    let (n, surface_points) = (surfaces.cache.len(), surfaces.query_points);
+    eprintln!("{records} records over {points} query points; surfaces: {n} over {surface_points}");
+    let image = &r.reconstruction.image.values;
+    assert!(
+        image.iter().all(|&v| luminance(v) == 0.0),
+        "the sealed lamp lights nothing"
+    );
     assert!(
         records * 20 < points as usize,
         "{records} records over {points} query points"
+    );
+    assert!(
+        n * 5 < surface_points as usize,
+        "{n} surface records over {surface_points} query points"
     );
 }
 
@@ -86,7 +98,7 @@ fn dark_records_do_not_blank_lit_fog() {
     let n = pt.len() as f64;
     let pt_mean = pt.iter().sum::<f64>() / n;
     for seed in [1, 2] {
-        let (r, points) = cached_render(&s, seed);
+        let (r, points) = cached_render(&s, seed, false);
         let image: Vec<f64> = r.reconstruction.image.medium.iter().map(|c| luminance(*c)).collect();
         let records = r.placement.caches[0].records();
         let dark = records.iter().filter(|r| r.value.luminance().value == 0.0).count();

@@ -105,6 +105,15 @@ impl<S: Space> PartDerivs<S> {
         self.direct + self.single + self.multiple
     }
 
+    /// Every part's value is zero: the estimate saw no light at all (one part
+    /// alone can be zero where the others are not, as single scattering in a
+    /// lamp's shadow).
+    pub fn sees_no_light(&self) -> bool {
+        [self.direct, self.single, self.multiple]
+            .iter()
+            .all(|t| t.value() == Rgb::ZERO)
+    }
+
     pub fn is_finite(&self) -> bool {
         self.direct.is_finite() && self.single.is_finite() && self.multiple.is_finite()
     }

@@ -331,11 +331,7 @@ impl<S: Dim> RecordData<S> {
         // Only a record dark in every part: one part alone can be zero where the
         // others are not (single scattering in a lamp's shadow, `per_part`), and
         // there the edge of that zero is near.
-        let p = &self.parts;
-        let dark = [p.direct, p.single, p.multiple]
-            .iter()
-            .all(|t| t.value() == crate::core::color::Rgb::ZERO);
-        if l == 0.0 && dark {
+        if l == 0.0 && self.parts.sees_no_light() {
             self.floored_values[q as usize]
         } else {
             l

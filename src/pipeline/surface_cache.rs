@@ -131,10 +131,12 @@ pub fn place_surfaces<W: World, Q: SurfaceSource<W::S>>(
             *rays += d.rays;
             records_seconds += d.seconds;
             let value = d.irradiance();
+            let mut luminance = value.luminance();
+            luminance.value = d.metric_luminance(luminance.value);
             let record = Record {
                 position: p.y,
                 value,
-                extent: cs.method.extent(&value.luminance(), d.metric_hessian, &metric),
+                extent: cs.method.extent(&luminance, d.metric_hessian, &metric),
                 cost_rays: d.rays,
             };
             // A non-finite light field is refused: the point stays uncovered and is

@@ -46,6 +46,10 @@ pub struct SurfaceRecordData<S: Dim> {
     /// jarosz08: zero): its tangential part, the normal axis closed
     /// ([`close_normal`]).
     pub metric_hessian: S::Mat,
+    /// The luminance of the same floored irradiance (zero for jarosz08): what the
+    /// metric measures a record that sees no light at all with
+    /// ([`SurfaceRecordData::metric_luminance`]).
+    pub floored_value: f64,
     pub rays: u64,
     /// Wall time of the capture and derivatives.
     pub seconds: f64,
@@ -55,6 +59,19 @@ impl<S: Dim> SurfaceRecordData<S> {
     /// The irradiance of every part, with its derivatives.
     pub fn irradiance(&self) -> TaylorRgb<S> {
         self.parts.total()
+    }
+
+    /// The luminance the metric measures this record with, `l` being its
+    /// irradiance's: `l`, or its floored irradiance's where it sees no light at
+    /// all, as a medium record's (`super::record::RecordData::metric_luminance`):
+    /// with L = 0 each dark surface point took a record of its own (the floor
+    /// around a sealed lamp: 460 records over 465 query points at 16×12).
+    pub fn metric_luminance(&self, l: f64) -> f64 {
+        if l == 0.0 && self.parts.sees_no_light() {
+            self.floored_value
+        } else {
+            l
+        }
     }
 }
 
@@ -77,25 +94,28 @@ pub fn compute_surface_record<W: World>(
     // A stream of its own: a surface record at a medium record's id draws others.
     let seed = mix64(cs.seed ^ mix64(id ^ SURFACE_STREAM));
     let lf = capture_surface(world, x, receiver, &probe, seed, 0, progress)?;
-    let (parts, metric_hessian) = derive(&lf, cs);
+    let (parts, metric_hessian, floored_value) = derive(&lf, cs);
     let n = receiver.normal;
     Ok(SurfaceRecordData {
         normal: n,
         parts: tangential(with_plain_values(parts, &lf), n),
         metric_hessian: close_normal::<W::S>(project_mat::<W::S>(metric_hessian, n), n),
+        floored_value,
         rays: lf.cost_rays,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
 
-/// The method's derivatives of E and the metric's luminance Hessian.
-fn derive<S: Dim>(lf: &LightField<S>, cs: &CacheSettings) -> (PartDerivs<S>, S::Mat) {
+/// The method's derivatives of E, the metric's luminance Hessian and the floored
+/// irradiance's luminance.
+fn derive<S: Dim>(lf: &LightField<S>, cs: &CacheSettings) -> (PartDerivs<S>, S::Mat, f64) {
     match cs.method {
         CacheMethod::Ours => {
             let (parts, floored) = aware_with_floor(lf, &build(lf, cs.aware.rule), &cs.aware, cs.hessian_floor);
-            (parts, floored.unwrap_or(parts).total().luminance().hess)
+            let floored = floored.unwrap_or(parts).total().luminance();
+            (parts, floored.hess, floored.value)
         }
-        CacheMethod::Jarosz08 => (unaware(lf), S::zero_mat()),
+        CacheMethod::Jarosz08 => (unaware(lf), S::zero_mat(), 0.0),
     }
 }
 
