@@ -222,8 +222,7 @@ pub fn place_onto<W: World, Q: QuerySource<W::S>>(
             let lamp = cs.lamp_reach.map(|k| (k, nearest_lamp(world.point_lights(), p.y)));
             for c in missing {
                 let value = d.payload(cached[c]);
-                let mut luminance = value.luminance();
-                luminance.value = d.metric_luminance(cached[c], luminance.value);
+                let luminance = d.metric_luminance(cached[c], value.luminance());
                 let mut extent = cs.method.extent(&luminance, d.metric_hessian(cached[c]), &metric);
                 if let Some(k) = cs.edge_reach {
                     extent = extent.within((k * d.nearest_edge).max(metric.r_min));

@@ -23,9 +23,11 @@ use super::proxy::build;
 use super::seen_ends::nearest_seen_end;
 use super::silhouette::nearest_boundary;
 use super::world::{DirectLight, World};
+use crate::core::color::Rgb;
 use crate::core::metric::{CacheMethod, MetricParams};
 use crate::core::rng::mix64;
 use crate::core::space::Space;
+use crate::core::taylor::Taylor2;
 use crate::progress::{Cancelled, Progress};
 use serde::Serialize;
 use std::time::Instant;
@@ -231,6 +233,9 @@ pub struct RecordData<S: Dim> {
     /// (zero for jarosz08): what the metric measures a record that saw no light at
     /// all with ([`RecordData::metric_luminance`]).
     pub floored_values: [f64; 3],
+    /// Jarosz 2008's: the luminance gradient of its floored light, whose radius
+    /// it sets (zero for ours, whose metric takes the floored Hessian).
+    pub floored_grads: [S::Vec; 3],
     /// Per basis function of the moments over ω_o, value and derivatives per part
     /// (empty unless asked for: [`CacheSettings::moment_bands`]).
     pub moments: Vec<PartDerivs<S>>,
@@ -327,12 +332,24 @@ impl<S: Dim> RecordData<S> {
     /// not finish in 5 minutes. Measured with the floor's unit radiance, the
     /// extent is the geometric one irradiance caching gives (Ward's, Schwarzhaupt
     /// et al.'s floored Hessian), and serving zero there is right.
-    pub fn metric_luminance(&self, q: Cached, l: f64) -> f64 {
+    /// Jarosz 2008's radius, ε L / |∇L|, is measured with its floored light's
+    /// value and gradient alike.
+    pub fn metric_luminance(&self, q: Cached, l: Taylor2<S>) -> Taylor2<S> {
         // Only a record dark in every part: one part alone can be zero where the
         // others are not (single scattering in a lamp's shadow, `per_part`), and
         // there the edge of that zero is near.
-        if l == 0.0 && self.parts.sees_no_light() {
-            self.floored_values[q as usize]
+        if l.value == 0.0 && self.parts.sees_no_light() {
+            let k = q as usize;
+            let grad = if S::length(self.floored_grads[k]) > 0.0 {
+                self.floored_grads[k]
+            } else {
+                l.grad
+            };
+            Taylor2 {
+                value: self.floored_values[k],
+                grad,
+                hess: l.hess,
+            }
         } else {
             l
         }
@@ -423,6 +440,7 @@ pub fn compute_record<W: World>(
         parts,
         metric_hessians,
         floored_values,
+        floored_grads,
         moments,
         placed_weights,
         multiple_grad_var,
@@ -431,6 +449,7 @@ pub fn compute_record<W: World>(
         parts,
         metric_hessians,
         floored_values,
+        floored_grads,
         moments,
         placed_weights,
         placed_omega: {
@@ -455,6 +474,7 @@ struct Derived<S: Dim> {
     parts: PartDerivs<S>,
     metric_hessians: [S::Mat; 3],
     floored_values: [f64; 3],
+    floored_grads: [S::Vec; 3],
     moments: Vec<PartDerivs<S>>,
     placed_weights: Vec<f64>,
     multiple_grad_var: f64,
@@ -475,6 +495,7 @@ impl<S: Dim> Derived<S> {
             *h = fields.iter().fold(S::zero_mat(), |a, d| a + d.metric_hessians[k]) * (1.0 / n);
         }
         let floored_values = [0, 1, 2].map(|k| fields.iter().map(|d| d.floored_values[k]).sum::<f64>() / n);
+        let floored_grads = [0, 1, 2].map(|k| fields.iter().fold(S::zero(), |a, d| a + d.floored_grads[k]) * (1.0 / n));
         let moments = (0..fields[0].moments.len())
             .map(|k| PartDerivs::mean(&fields.iter().map(|d| d.moments[k]).collect::<Vec<_>>()))
             .collect();
@@ -482,6 +503,7 @@ impl<S: Dim> Derived<S> {
             parts: PartDerivs::mean(&fields.iter().map(|d| d.parts).collect::<Vec<_>>()),
             metric_hessians,
             floored_values,
+            floored_grads,
             moments,
             placed_weights: fields[0].placed_weights.clone(),
             multiple_grad_var: fields.iter().map(|d| d.multiple_grad_var).sum::<f64>() / (n * n),
@@ -495,15 +517,24 @@ fn derive<S: Dim>(lf: &mut LightField<S>, cs: &CacheSettings) -> Derived<S> {
     let zero = S::zero_mat();
     let proxy = (cs.method == CacheMethod::Ours).then(|| build(lf, cs.aware.rule));
     let mut multiple_grad_var = 0.0;
-    let (parts, metric_hessians, floored_values) = match &proxy {
+    let (parts, metric_hessians, floored_values, floored_grads) = match &proxy {
         Some(proxy) => {
             let (parts, floored, var) = aware_with_noise(lf, proxy, &cs.aware, cs.hessian_floor);
             multiple_grad_var = var;
             let floored = floored.unwrap_or(parts);
             let each = [floored.single + floored.multiple, floored.single, floored.multiple].map(|t| t.luminance());
-            (parts, each.map(|l| l.hess), each.map(|l| l.value))
+            (parts, each.map(|l| l.hess), each.map(|l| l.value), [S::zero(); 3])
         }
-        None => (unaware(lf), [zero; 3], [0.0; 3]),
+        None => {
+            let parts = unaware(lf);
+            // Only a light field that saw nothing pays for its floored twin.
+            let floored = match parts.sees_no_light() {
+                true => unaware(&floored_light(lf)),
+                false => parts,
+            };
+            let each = [floored.total(), floored.single, floored.multiple].map(|t| t.luminance());
+            (parts, [zero; 3], each.map(|l| l.value), each.map(|l| l.grad))
+        }
     };
     let parts = with_plain_values(parts, lf);
     let (moments, placed_weights) = match cs.moment_bands {
@@ -517,10 +548,26 @@ fn derive<S: Dim>(lf: &mut LightField<S>, cs: &CacheSettings) -> Derived<S> {
         parts,
         metric_hessians,
         floored_values,
+        floored_grads,
         moments,
         placed_weights,
         multiple_grad_var,
     }
+}
+
+/// The light field with unit radiance added to every hit and escaped ray, as the
+/// metric's radiance floor adds it to every proxy element of a black light field
+/// (`crate::core::metric::hessian_radiance_floor`): what Jarosz 2008 measures a
+/// record that saw no light with.
+fn floored_light<S: Dim>(lf: &LightField<S>) -> LightField<S> {
+    let mut floored = lf.clone();
+    for r in &mut floored.rays {
+        match &mut r.hit {
+            Some(h) => h.radiance += Rgb::ONE,
+            None => r.escaped += Rgb::ONE,
+        }
+    }
+    floored
 }
 
 /// Distance from the light field's point to the nearest point light it sees, +∞
