@@ -569,7 +569,9 @@ fn trace_field<W: World>(
                     // is ≈ 1/ξ at an even march's first step): never rouletted.
                     let keep = if i < UNROULETTED_SAMPLES { 1.0 } else { keep };
                     let mut sum = Rgb::ZERO;
-                    if let (true, Some(beyond)) = (m.contains(p), &beyond)
+                    // Outside the medium, or with no vertex left past x, a sample is dark.
+                    let traced = beyond.as_ref().filter(|_| m.contains(p));
+                    if let Some(beyond) = traced
                         && with_slopes
                     {
                         for _ in 0..paths {
@@ -587,7 +589,7 @@ fn trace_field<W: World>(
                             scattered.push((i, one));
                         }
                         sum = sum * m.sigma_s / paths as f64;
-                    } else if let (true, Some(beyond)) = (m.contains(p), &beyond) {
+                    } else if let Some(beyond) = traced {
                         for _ in 0..paths {
                             let each = &mut ignore;
                             sum += sample_at_each(
